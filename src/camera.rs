@@ -1,0 +1,134 @@
+//! A pinhole camera: `world_from_camera` and primary rays.
+//!
+//! Pixel (row i from the top, column j from the left) of a W×H image looks through the screen
+//! point x = −1 + 2(j+u)/W, y = (1 − 2(i+v)/H)·H/W, with (u, v) = (0.5, 0.5) at the pixel
+//! centre, along normalize(forward + x·tan(fov/2)·right + y·tan(fov/2)·up). With the camera at
+//! (0,0,1) looking at the origin and fov 90 that is exactly the talk's screen on the plane z = 0.
+
+use glam::DVec3;
+
+/// Where the camera is and where it looks, as the sequence file and the timeline give it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pose {
+    pub position: DVec3,
+    pub look_at: DVec3,
+    pub up: DVec3,
+    /// Horizontal field of view in degrees, in (0, 180).
+    pub fov: f64,
+}
+
+/// Why a pose cannot be turned into a camera.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum Degenerate {
+    #[error("the camera position equals its look_at, so it has no view direction")]
+    NoViewDirection,
+    #[error("up is parallel to the view direction, so the camera's roll is undefined")]
+    UpParallel,
+    #[error("fov must be in (0, 180) degrees")]
+    Fov,
+}
+
+/// An orthonormal camera frame, ready to make rays.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    pub origin: DVec3,
+    pub forward: DVec3,
+    pub right: DVec3,
+    pub up: DVec3,
+    tan_half_fov: f64,
+}
+
+/// Below this sine of the angle between up and the view direction the roll is numerically
+/// meaningless (a 0.0006° tilt), so such a pose is rejected rather than rendered spinning.
+const MIN_UP_SINE: f64 = 1e-5;
+
+impl Camera {
+    pub fn new(pose: &Pose) -> Result<Camera, Degenerate> {
+        if !(pose.fov > 0.0 && pose.fov < 180.0) {
+            return Err(Degenerate::Fov);
+        }
+        let view = pose.look_at - pose.position;
+        let length = view.length();
+        if !(length > 0.0 && length.is_finite()) {
+            return Err(Degenerate::NoViewDirection);
+        }
+        let forward = view / length;
+        let up_length = pose.up.length();
+        let up_perp = pose.up - pose.up.dot(forward) * forward;
+        let rolls = up_perp.length() > MIN_UP_SINE * up_length;
+        if !rolls {
+            return Err(Degenerate::UpParallel);
+        }
+        let up = up_perp.normalize();
+        Ok(Camera {
+            origin: pose.position,
+            forward,
+            right: forward.cross(up),
+            up,
+            tan_half_fov: (pose.fov.to_radians() * 0.5).tan(),
+        })
+    }
+
+    /// 3×3 rotation (columns right, up, −forward) and translation to world space.
+    pub fn world_from_camera(&self) -> (glam::DMat3, DVec3) {
+        (
+            glam::DMat3::from_cols(self.right, self.up, -self.forward),
+            self.origin,
+        )
+    }
+
+    /// Unit direction through screen point (x, y) as defined in the module doc.
+    #[inline]
+    pub fn direction(&self, x: f64, y: f64) -> DVec3 {
+        let s = self.tan_half_fov;
+        (self.forward + (x * s) * self.right + (y * s) * self.up).normalize()
+    }
+}
+
+/// Screen coordinates of the point (u, v) ∈ [0,1)² inside pixel (row, col) of a width×height image.
+#[inline]
+pub fn screen_point(row: u32, col: u32, u: f64, v: f64, width: u32, height: u32) -> (f64, f64) {
+    let w = f64::from(width);
+    let h = f64::from(height);
+    let x = -1.0 + 2.0 * (f64::from(col) + u) / w;
+    let y = (1.0 - 2.0 * (f64::from(row) + v) / h) * h / w;
+    (x, y)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn talk_pose() -> Pose {
+        Pose {
+            position: DVec3::new(0.0, 0.0, 1.0),
+            look_at: DVec3::ZERO,
+            up: DVec3::Y,
+            fov: 90.0,
+        }
+    }
+
+    #[test]
+    fn talk_camera_looks_through_the_z0_screen() {
+        let cam = Camera::new(&talk_pose()).unwrap();
+        let (x, y) = screen_point(0, 0, 0.5, 0.5, 4, 2);
+        assert_eq!((x, y), (-0.75, 0.25));
+        let d = cam.direction(x, y);
+        let want = (DVec3::new(x, y, 0.0) - DVec3::new(0.0, 0.0, 1.0)).normalize();
+        assert!((d - want).length() < 1e-15, "{d} vs {want}");
+        assert_eq!(cam.right, DVec3::X);
+    }
+
+    #[test]
+    fn degenerate_poses_are_errors_not_nans() {
+        let mut p = talk_pose();
+        p.look_at = p.position;
+        assert_eq!(Camera::new(&p), Err(Degenerate::NoViewDirection));
+        let mut p = talk_pose();
+        p.up = DVec3::new(0.0, 0.0, -3.0);
+        assert_eq!(Camera::new(&p), Err(Degenerate::UpParallel));
+        let mut p = talk_pose();
+        p.fov = 180.0;
+        assert_eq!(Camera::new(&p), Err(Degenerate::Fov));
+    }
+}

@@ -1,0 +1,182 @@
+//! Command-line definitions (clap) and frame specs (`7`, `0-23`, `0-100:5`, `1-100x2`, `1,3,7-9`).
+
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+const EXAMPLES: &str = "\
+Examples:
+  rayreel render sequences/orbit.yaml
+  rayreel render sequences/talk.yaml --size 640x360 --output /tmp/talk/frame_####.png
+  rayreel render sequences/orbit.yaml --frames 0-47:2 --threads 2
+  rayreel check sequences/flyby.yaml";
+
+#[derive(Debug, Parser)]
+#[command(name = "rayreel", version, about = "Render camera fly-through animations with a Whitted ray tracer", after_help = EXAMPLES)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render a sequence file to numbered frames.
+    #[command(after_help = EXAMPLES)]
+    Render(RenderArgs),
+    /// Validate a sequence file and print a one-screen summary.
+    Check(CheckArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// The sequence file (YAML).
+    pub file: PathBuf,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The sequence file (YAML).
+    pub file: PathBuf,
+    /// Image size, e.g. 640x360 (overrides render.width/height).
+    #[arg(long, value_parser = parse_size, value_name = "WxH")]
+    pub size: Option<(u64, u64)>,
+    /// Output pattern; a run of '#' becomes the zero-padded frame number.
+    #[arg(long, short, value_name = "PATTERN")]
+    pub output: Option<String>,
+    /// Surfaces one path may visit (1 = no reflections).
+    #[arg(long, value_name = "N")]
+    pub max_depth: Option<u64>,
+    /// Frames to render, e.g. 7, 0-23, 0-100:5, 1,3,10-12 (default: all).
+    #[arg(long, value_name = "SPEC", value_parser = parse_frame_spec)]
+    pub frames: Option<FrameSpec>,
+    /// Worker threads (default: all cores).
+    #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Option<u16>,
+    /// No progress bar and no per-frame lines.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// `WxH` with both parts positive integers.
+pub fn parse_size(s: &str) -> Result<(u64, u64), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT such as 640x360 (got `{s}`)"))?;
+    let num = |p: &str| {
+        p.trim().parse::<u64>().map_err(|_| {
+            format!("expected WIDTHxHEIGHT with whole numbers such as 640x360 (got `{s}`)")
+        })
+    };
+    Ok((num(w)?, num(h)?))
+}
+
+/// A union of inclusive ranges with steps, kept unexpanded until the frame count is known.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FrameSpec {
+    ranges: Vec<(u64, u64, u64)>,
+}
+
+impl FrameSpec {
+    /// The selected frames in ascending order without repeats, or the first one out of range.
+    pub fn frames(&self, frame_count: u64) -> Result<Vec<u64>, String> {
+        let mut out = Vec::new();
+        for &(start, end, step) in &self.ranges {
+            if end >= frame_count {
+                return Err(format!(
+                    "frame {end} is outside the timeline, which has frames 0-{}",
+                    frame_count.saturating_sub(1)
+                ));
+            }
+            out.extend((start..=end).step_by(step as usize));
+        }
+        out.sort_unstable();
+        out.dedup();
+        Ok(out)
+    }
+}
+
+pub fn parse_frame_spec(s: &str) -> Result<FrameSpec, String> {
+    let bad = |part: &str, why: &str| {
+        format!(
+            "`{part}` in frame spec `{s}`: {why}; use forms like 7, 0-23, 0-100:5, 1-100x2, 1,3,10-12"
+        )
+    };
+    let mut ranges = Vec::new();
+    for part in s.split(',') {
+        let part = part.trim();
+        if part.is_empty() {
+            return Err(bad(part, "empty entry"));
+        }
+        let (range, step) = match part.split_once([':', 'x']) {
+            Some((r, st)) => (r, Some(st)),
+            None => (part, None),
+        };
+        let num = |t: &str| {
+            t.trim()
+                .parse::<u64>()
+                .map_err(|_| bad(part, "not a whole number"))
+        };
+        let (start, end) = match range.split_once('-') {
+            Some((a, b)) => (num(a)?, num(b)?),
+            None => {
+                let n = num(range)?;
+                (n, n)
+            }
+        };
+        if start > end {
+            return Err(bad(part, "the range runs backwards"));
+        }
+        let step = match step {
+            Some(st) => num(st)?,
+            None => 1,
+        };
+        if step == 0 || step > usize::MAX as u64 {
+            return Err(bad(part, "the step must be at least 1"));
+        }
+        ranges.push((start, end, step));
+    }
+    Ok(FrameSpec { ranges })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frames(s: &str, count: u64) -> Result<Vec<u64>, String> {
+        parse_frame_spec(s)?.frames(count)
+    }
+
+    #[test]
+    fn specs_expand() {
+        assert_eq!(frames("7", 10).unwrap(), vec![7]);
+        assert_eq!(frames("0-3", 10).unwrap(), vec![0, 1, 2, 3]);
+        assert_eq!(frames("0-10:5", 11).unwrap(), vec![0, 5, 10]);
+        assert_eq!(frames("1-9x4", 11).unwrap(), vec![1, 5, 9]);
+        assert_eq!(frames("1,3,10-12", 13).unwrap(), vec![1, 3, 10, 11, 12]);
+        assert_eq!(frames("3,1-3", 13).unwrap(), vec![1, 2, 3]);
+    }
+
+    #[test]
+    fn garbage_is_rejected_clearly() {
+        for bad in ["", "a", "1-", "-3", "5-2", "1-9:0", "1,,2", "1.5", "0-3:x"] {
+            let err = frames(bad, 100).unwrap_err();
+            assert!(
+                err.contains("frame spec") || err.contains("outside"),
+                "{bad}: {err}"
+            );
+        }
+        let err = frames("0-100", 48).unwrap_err();
+        assert!(
+            err.contains("frame 100 is outside the timeline, which has frames 0-47"),
+            "{err}"
+        );
+        // A huge range is refused before anything is expanded.
+        assert!(frames("0-18446744073709551615", 48).is_err());
+    }
+
+    #[test]
+    fn sizes() {
+        assert_eq!(parse_size("640x360"), Ok((640, 360)));
+        assert!(parse_size("640").is_err());
+        assert!(parse_size("-1x3").is_err());
+    }
+}

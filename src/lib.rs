@@ -1,0 +1,40 @@
+//! rayreel: sequence file → validated scene + timeline → per-frame camera → tracer → frame
+//! buffer → sinks. `run` is the whole program behind the command line.
+
+pub mod camera;
+pub mod cli;
+pub mod frame;
+pub mod output;
+pub mod progress;
+pub mod scene;
+pub mod schedule;
+pub mod sequence;
+pub mod timeline;
+pub mod tracer;
+
+mod commands;
+
+pub use commands::run;
+
+/// Everything that ends a run early, with the exit code it maps to.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The sequence file or a flag is wrong: nothing was rendered (exit 2).
+    #[error(transparent)]
+    Load(#[from] sequence::LoadError),
+    /// The command line asks for something impossible (exit 2).
+    #[error("{0}")]
+    Usage(String),
+    /// Rendering or writing failed (exit 1).
+    #[error("{0}")]
+    Failed(String),
+}
+
+impl Error {
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Error::Load(_) | Error::Usage(_) => 2,
+            Error::Failed(_) => 1,
+        }
+    }
+}

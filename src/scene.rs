@@ -1,0 +1,80 @@
+//! The validated scene: plain data, no I/O. Everything here has passed `sequence::load`, so
+//! radii are positive, normals and directions are unit length, colours are finite and ≥ 0.
+//!
+//! ```yaml
+//! materials: { red: { ambient: [0.1, 0, 0], diffuse: [0.7, 0, 0], specular: [1, 1, 1], shininess: 100, reflection: 0.5 } }
+//! objects:   [ { sphere: { center: [-0.2, 0, -1], radius: 0.7, material: red } } ]
+//! lights:    [ { point: { position: [5, 5, 5], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] } } ]
+//! ```
+
+use glam::DVec3;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    pub ambient: DVec3,
+    pub diffuse: DVec3,
+    pub specular: DVec3,
+    /// The Blinn-Phong exponent: the YAML `shininess` divided by 4 (the talk's convention).
+    pub exponent: f64,
+    pub reflection: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    Sphere {
+        center: DVec3,
+        radius: f64,
+    },
+    /// `normal` is unit length; the plane is every x with (x − point)·normal = 0.
+    Plane {
+        point: DVec3,
+        normal: DVec3,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Object {
+    pub shape: Shape,
+    /// Index into `Scene::materials`.
+    pub material: usize,
+}
+
+/// The three Blinn-Phong intensities a light carries.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Intensity {
+    pub ambient: DVec3,
+    pub diffuse: DVec3,
+    pub specular: DVec3,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Light {
+    Point {
+        position: DVec3,
+        intensity: Intensity,
+    },
+    /// `to_light` is the unit vector towards the light (the YAML `direction` reversed).
+    Directional {
+        to_light: DVec3,
+        intensity: Intensity,
+    },
+    /// `axis` is the unit direction the spot shines in; the cosines bound the smooth falloff.
+    Spot {
+        position: DVec3,
+        axis: DVec3,
+        cos_inner: f64,
+        cos_outer: f64,
+        intensity: Intensity,
+    },
+    Ambient {
+        color: DVec3,
+    },
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    pub objects: Vec<Object>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    pub background: DVec3,
+}

@@ -1,0 +1,690 @@
+//! `load(path) → Sequence`: reads the YAML, checks every field, and resolves names, defaults
+//! and the timeline. Every rejection names `FILE:LINE:COL: field.path: what is wrong (got X)`.
+//!
+//! serde_yaml reports syntax, type, unknown-key and missing-key errors with their position.
+//! The checks below work on the parsed structs and name the field by its path; `locate` then
+//! finds that path's line and column by walking the document once more.
+
+mod locate;
+pub mod raw;
+
+use crate::camera::{Camera, Degenerate, Pose};
+use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
+use crate::timeline::{Ease, Interpolation, Key, Orbit, Path as TimelinePath, Timeline};
+use crate::tracer::Settings;
+use glam::DVec3;
+use std::fmt::Display;
+use std::path::{Path, PathBuf};
+
+/// Largest width or height accepted, in pixels.
+pub const MAX_DIMENSION: u64 = 16384;
+/// Largest `max_depth` accepted.
+pub const MAX_DEPTH: u64 = 10_000;
+/// Largest shininess accepted (the exponent is shininess / 4).
+pub const MAX_SHININESS: f64 = 1e6;
+/// Largest colour component or intensity accepted.
+pub const MAX_COLOR: f64 = 1e6;
+/// Largest number of frames a timeline may have.
+pub const MAX_FRAMES: u64 = 10_000_000;
+/// Largest frames per second accepted.
+pub const MAX_FPS: f64 = 1000.0;
+
+/// A validated sequence file: everything needed to render any of its frames.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sequence {
+    /// The file's stem, used in the default output pattern.
+    pub name: String,
+    pub scene: Scene,
+    pub timeline: Timeline,
+    pub settings: Settings,
+    /// Output pattern; a run of `#` stands for the zero-padded frame number.
+    pub output: String,
+}
+
+/// Values given on the command line; they replace the file's.
+#[derive(Debug, Clone, Default)]
+pub struct Overrides {
+    pub size: Option<(u64, u64)>,
+    pub max_depth: Option<u64>,
+    pub output: Option<String>,
+    pub depth: bool,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    #[error("{file}: cannot read: {source}")]
+    Io {
+        file: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{file}:{line}:{col}: {message}")]
+    Invalid {
+        file: PathBuf,
+        line: usize,
+        col: usize,
+        message: String,
+    },
+    #[error("{flag}: {message}")]
+    Flag { flag: &'static str, message: String },
+}
+
+/// A rejected value: the YAML path of the field and what is wrong with it.
+#[derive(Debug)]
+struct Invalid {
+    path: String,
+    message: String,
+}
+
+type Check<T> = Result<T, Invalid>;
+
+fn invalid<T>(path: impl Into<String>, message: impl Into<String>) -> Check<T> {
+    Err(Invalid {
+        path: path.into(),
+        message: message.into(),
+    })
+}
+
+pub fn load(file: &Path, overrides: &Overrides) -> Result<Sequence, LoadError> {
+    let text = std::fs::read_to_string(file).map_err(|source| LoadError::Io {
+        file: file.to_owned(),
+        source,
+    })?;
+    parse(file, &text, overrides)
+}
+
+/// `load` for text already in memory; `file` is only used to name things.
+pub fn parse(file: &Path, text: &str, overrides: &Overrides) -> Result<Sequence, LoadError> {
+    let raw: raw::Sequence = serde_yaml::from_str(text).map_err(|e| yaml_error(file, &e))?;
+    let name = file
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "sequence".into());
+    let mut seq = validate(raw, &name).map_err(|e| {
+        let (line, col) = locate::locate(text, &e.path);
+        let message = format!("{}: {}", e.path, e.message);
+        LoadError::Invalid {
+            file: file.to_owned(),
+            line,
+            col,
+            message,
+        }
+    })?;
+    apply(&mut seq, overrides)?;
+    Ok(seq)
+}
+
+fn yaml_error(file: &Path, e: &serde_yaml::Error) -> LoadError {
+    let (line, col) = e.location().map_or((1, 1), |l| (l.line(), l.column()));
+    let text = e.to_string();
+    // serde_yaml appends " at line L column C" (and libyaml "..., while parsing ... at ...");
+    // the position is already in front, so keep only the first clause.
+    let message = match text.find(" at line ") {
+        Some(i) => text[..i].to_string(),
+        None => text,
+    };
+    let message = if message.is_empty() {
+        "invalid YAML".into()
+    } else {
+        message
+    };
+    LoadError::Invalid {
+        file: file.to_owned(),
+        line,
+        col,
+        message,
+    }
+}
+
+fn apply(seq: &mut Sequence, o: &Overrides) -> Result<(), LoadError> {
+    let flag = |flag, message: String| LoadError::Flag { flag, message };
+    if let Some((w, h)) = o.size {
+        seq.settings.width = dimension(w).map_err(|m| flag("--size", format!("width {m}")))?;
+        seq.settings.height = dimension(h).map_err(|m| flag("--size", format!("height {m}")))?;
+    }
+    if let Some(d) = o.max_depth {
+        seq.settings.max_depth = max_depth(d).map_err(|m| flag("--max-depth", m))?;
+    }
+    if let Some(out) = &o.output {
+        seq.output = out.clone();
+    }
+    seq.settings.depth |= o.depth;
+    Ok(())
+}
+
+fn dimension(v: u64) -> Result<u32, String> {
+    if (1..=MAX_DIMENSION).contains(&v) {
+        Ok(v as u32)
+    } else {
+        Err(format!("must be 1 to {MAX_DIMENSION} pixels (got {v})"))
+    }
+}
+
+fn max_depth(v: u64) -> Result<u32, String> {
+    if (1..=MAX_DEPTH).contains(&v) {
+        Ok(v as u32)
+    } else {
+        Err(format!(
+            "must be 1 (no reflections) to {MAX_DEPTH} (got {v})"
+        ))
+    }
+}
+
+fn validate(raw: raw::Sequence, name: &str) -> Check<Sequence> {
+    let settings = render_settings(&raw.render)?;
+    let background = color(
+        "render.background",
+        raw.render.background.unwrap_or_default(),
+    )?;
+    let mut materials = Vec::new();
+    for (name, m) in &raw.materials.0 {
+        materials.push(material(&format!("materials.{name}"), m)?);
+    }
+    let names: Vec<&str> = raw.materials.0.iter().map(|(n, _)| n.as_str()).collect();
+    let mut objects = Vec::new();
+    for (i, o) in raw.objects.iter().enumerate() {
+        objects.push(object(&format!("objects[{i}]"), o, &names, &mut materials)?);
+    }
+    let mut lights = Vec::new();
+    for (i, l) in raw.lights.iter().enumerate() {
+        lights.push(light(&format!("lights[{i}]"), l)?);
+    }
+    let camera = raw.camera.as_ref().map(camera_pose).transpose()?;
+    let timeline = match (&raw.timeline, camera) {
+        (Some(t), camera) => timeline(t, camera)?,
+        (None, Some(pose)) => Timeline::still(pose),
+        (None, None) => return invalid("camera", "a sequence needs a `camera:` or a `timeline:`"),
+    };
+    Ok(Sequence {
+        name: name.to_string(),
+        scene: Scene {
+            objects,
+            materials,
+            lights,
+            background,
+        },
+        timeline,
+        settings,
+        output: match raw.output {
+            Some(o) if o.trim().is_empty() => return invalid("output", "must not be empty"),
+            Some(o) => o,
+            None => format!("frames/{name}/frame_####.png"),
+        },
+    })
+}
+
+fn render_settings(r: &raw::Render) -> Check<Settings> {
+    let check = |path: &str, r: Result<u32, String>| r.or_else(|m| invalid(path, m));
+    Ok(Settings {
+        width: check("render.width", dimension(r.width.unwrap_or(1280)))?,
+        height: check("render.height", dimension(r.height.unwrap_or(720)))?,
+        max_depth: check("render.max_depth", max_depth(r.max_depth.unwrap_or(3)))?,
+        depth: false,
+    })
+}
+
+fn got(v: impl Display) -> String {
+    format!("(got {v})")
+}
+
+fn number(path: &str, v: f64) -> Check<f64> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        invalid(path, format!("must be a finite number {}", got(v)))
+    }
+}
+
+fn vector(path: &str, v: raw::V3) -> Check<DVec3> {
+    for (i, x) in v.iter().enumerate() {
+        number(&format!("{path}[{i}]"), *x)?;
+    }
+    Ok(DVec3::from(v))
+}
+
+fn fmt3(v: raw::V3) -> String {
+    format!("[{}, {}, {}]", v[0], v[1], v[2])
+}
+
+fn unit(path: &str, v: raw::V3) -> Check<DVec3> {
+    let d = vector(path, v)?;
+    let n = d.normalize_or_zero();
+    if n == DVec3::ZERO || !n.is_finite() {
+        return invalid(
+            path,
+            format!("must have a non-zero length {}", got(fmt3(v))),
+        );
+    }
+    Ok(n)
+}
+
+fn color(path: &str, v: raw::V3) -> Check<DVec3> {
+    let c = vector(path, v)?;
+    if c.min_element() < 0.0 || c.max_element() > MAX_COLOR {
+        return invalid(
+            path,
+            format!("components must be in [0, {MAX_COLOR}] {}", got(fmt3(v))),
+        );
+    }
+    Ok(c)
+}
+
+fn in_range(path: &str, v: f64, lo: f64, hi: f64, what: &str) -> Check<f64> {
+    number(path, v)?;
+    if v < lo || v > hi {
+        return invalid(path, format!("must be {what} {}", got(v)));
+    }
+    Ok(v)
+}
+
+fn positive(path: &str, v: f64) -> Check<f64> {
+    if number(path, v)? <= 0.0 {
+        return invalid(path, format!("must be greater than 0 {}", got(v)));
+    }
+    Ok(v)
+}
+
+fn fov(path: &str, v: f64) -> Check<f64> {
+    number(path, v)?;
+    if !(v > 0.0 && v < 180.0) {
+        return invalid(
+            path,
+            format!("must be between 0 and 180 degrees, exclusive {}", got(v)),
+        );
+    }
+    Ok(v)
+}
+
+fn material(path: &str, m: &raw::Material) -> Check<Material> {
+    let shininess = m.shininess.unwrap_or(100.0);
+    Ok(Material {
+        ambient: color(&format!("{path}.ambient"), m.ambient)?,
+        diffuse: color(&format!("{path}.diffuse"), m.diffuse)?,
+        specular: color(&format!("{path}.specular"), m.specular)?,
+        exponent: in_range(
+            &format!("{path}.shininess"),
+            shininess,
+            0.0,
+            MAX_SHININESS,
+            &format!("in [0, {MAX_SHININESS}]"),
+        )? / 4.0,
+        reflection: in_range(
+            &format!("{path}.reflection"),
+            m.reflection,
+            0.0,
+            1.0,
+            "in [0, 1]",
+        )?,
+    })
+}
+
+fn material_ref(
+    path: &str,
+    r: &raw::MaterialRef,
+    names: &[&str],
+    materials: &mut Vec<Material>,
+) -> Check<usize> {
+    match r {
+        raw::MaterialRef::Named(n) => names.iter().position(|m| m == n).map_or_else(
+            || {
+                let known = if names.is_empty() {
+                    "no materials are defined under `materials:`".to_string()
+                } else {
+                    format!("defined: {}", names.join(", "))
+                };
+                invalid(path, format!("unknown material `{n}` ({known})"))
+            },
+            Ok,
+        ),
+        raw::MaterialRef::Inline(m) => {
+            materials.push(material(path, m)?);
+            Ok(materials.len() - 1)
+        }
+    }
+}
+
+fn exactly_one<T>(path: &str, options: &[(&str, Option<T>)]) -> Check<T>
+where
+    T: Copy,
+{
+    let given: Vec<&(&str, Option<T>)> = options.iter().filter(|(_, v)| v.is_some()).collect();
+    let names: Vec<&str> = options.iter().map(|(n, _)| *n).collect();
+    match given.as_slice() {
+        [(_, Some(v))] => Ok(*v),
+        [] => invalid(path, format!("needs one of: {}", names.join(", "))),
+        many => invalid(
+            path,
+            format!(
+                "give exactly one of {} per entry (got {})",
+                names.join(", "),
+                many.iter()
+                    .map(|(n, _)| *n)
+                    .collect::<Vec<_>>()
+                    .join(" and ")
+            ),
+        ),
+    }
+}
+
+fn object(
+    path: &str,
+    o: &raw::Object,
+    names: &[&str],
+    materials: &mut Vec<Material>,
+) -> Check<Object> {
+    let which = exactly_one(
+        path,
+        &[
+            ("sphere", o.sphere.as_ref().map(|_| 0)),
+            ("plane", o.plane.as_ref().map(|_| 1)),
+        ],
+    )?;
+    if which == 0 {
+        let s = o.sphere.as_ref().expect("checked");
+        let p = format!("{path}.sphere");
+        Ok(Object {
+            shape: Shape::Sphere {
+                center: vector(&format!("{p}.center"), s.center)?,
+                radius: positive(&format!("{p}.radius"), s.radius)?,
+            },
+            material: material_ref(&format!("{p}.material"), &s.material, names, materials)?,
+        })
+    } else {
+        let s = o.plane.as_ref().expect("checked");
+        let p = format!("{path}.plane");
+        Ok(Object {
+            shape: Shape::Plane {
+                point: vector(&format!("{p}.point"), s.point)?,
+                normal: unit(&format!("{p}.normal"), s.normal)?,
+            },
+            material: material_ref(&format!("{p}.material"), &s.material, names, materials)?,
+        })
+    }
+}
+
+fn intensity(
+    path: &str,
+    ambient: raw::V3,
+    diffuse: raw::V3,
+    specular: raw::V3,
+) -> Check<Intensity> {
+    Ok(Intensity {
+        ambient: color(&format!("{path}.ambient"), ambient)?,
+        diffuse: color(&format!("{path}.diffuse"), diffuse)?,
+        specular: color(&format!("{path}.specular"), specular)?,
+    })
+}
+
+fn light(path: &str, l: &raw::Light) -> Check<Light> {
+    let which = exactly_one(
+        path,
+        &[
+            ("point", l.point.as_ref().map(|_| 0)),
+            ("directional", l.directional.as_ref().map(|_| 1)),
+            ("spot", l.spot.as_ref().map(|_| 2)),
+            ("ambient", l.ambient.as_ref().map(|_| 3)),
+        ],
+    )?;
+    Ok(match which {
+        0 => {
+            let p = l.point.as_ref().expect("checked");
+            let path = format!("{path}.point");
+            Light::Point {
+                position: vector(&format!("{path}.position"), p.position)?,
+                intensity: intensity(&path, p.ambient, p.diffuse, p.specular)?,
+            }
+        }
+        1 => {
+            let d = l.directional.as_ref().expect("checked");
+            let path = format!("{path}.directional");
+            Light::Directional {
+                to_light: -unit(&format!("{path}.direction"), d.direction)?,
+                intensity: intensity(&path, d.ambient, d.diffuse, d.specular)?,
+            }
+        }
+        2 => spot(&format!("{path}.spot"), l.spot.as_ref().expect("checked"))?,
+        _ => Light::Ambient {
+            color: color(
+                &format!("{path}.ambient.color"),
+                l.ambient.as_ref().expect("checked").color,
+            )?,
+        },
+    })
+}
+
+fn spot(path: &str, s: &raw::SpotLight) -> Check<Light> {
+    let angle = |name: &str, v: f64| {
+        in_range(
+            &format!("{path}.{name}"),
+            v,
+            0.0,
+            180.0,
+            "an angle in [0, 180] degrees",
+        )
+    };
+    let inner = angle("inner_angle", s.inner_angle)?;
+    let outer = angle("outer_angle", s.outer_angle)?;
+    if inner > outer {
+        return invalid(
+            format!("{path}.inner_angle"),
+            format!("must not exceed outer_angle ({outer}) {}", got(inner)),
+        );
+    }
+    Ok(Light::Spot {
+        position: vector(&format!("{path}.position"), s.position)?,
+        axis: unit(&format!("{path}.direction"), s.direction)?,
+        cos_inner: inner.to_radians().cos(),
+        cos_outer: outer.to_radians().cos(),
+        intensity: intensity(path, s.ambient, s.diffuse, s.specular)?,
+    })
+}
+
+fn camera_pose(c: &raw::Camera) -> Check<Pose> {
+    let pose = Pose {
+        position: vector("camera.position", c.position)?,
+        look_at: vector("camera.look_at", c.look_at)?,
+        up: vector("camera.up", c.up.unwrap_or([0.0, 1.0, 0.0]))?,
+        fov: fov("camera.fov", c.fov.unwrap_or(90.0))?,
+    };
+    check_pose("camera", &pose)?;
+    Ok(pose)
+}
+
+/// `path` is the mapping holding the pose; the error names the field to change.
+fn check_pose(path: &str, pose: &Pose) -> Check<()> {
+    Camera::new(pose).map(|_| ()).or_else(|e| {
+        let field = match e {
+            Degenerate::NoViewDirection => "look_at",
+            Degenerate::UpParallel => "up",
+            Degenerate::Fov => "fov",
+        };
+        invalid(
+            format!("{path}.{field}"),
+            format!(
+                "{e} (position {}, look_at {}, up {})",
+                pose.position, pose.look_at, pose.up
+            ),
+        )
+    })
+}
+
+fn timeline(t: &raw::Timeline, camera: Option<Pose>) -> Check<Timeline> {
+    let fps = in_range(
+        "timeline.fps",
+        t.fps.unwrap_or(24.0),
+        0.0,
+        MAX_FPS,
+        "in (0, 1000]",
+    )?;
+    if fps == 0.0 {
+        return invalid(
+            "timeline.fps",
+            format!("must be greater than 0 {}", got(fps)),
+        );
+    }
+    let (path, natural) = match (&t.keyframes, &t.orbit) {
+        (Some(_), Some(_)) => {
+            return invalid(
+                "timeline.orbit",
+                "give either `keyframes:` or `orbit:`, not both",
+            );
+        }
+        (None, None) => return invalid("timeline", "needs `keyframes:` or `orbit:`"),
+        (Some(keys), None) => {
+            let keys = keyframes(keys, camera)?;
+            let last = keys.last().expect("non-empty").time;
+            let interpolation = match t.interpolation.unwrap_or(raw::Interpolation::Smooth) {
+                raw::Interpolation::Linear => Interpolation::Linear,
+                raw::Interpolation::Smooth => Interpolation::Smooth,
+            };
+            (
+                TimelinePath::Keys {
+                    keys,
+                    interpolation,
+                },
+                last,
+            )
+        }
+        (None, Some(o)) => {
+            let o = orbit(o, camera)?;
+            (TimelinePath::Orbit(o), o.duration)
+        }
+    };
+    let duration = match t.duration {
+        Some(d) => positive("timeline.duration", d)?,
+        None if natural > 0.0 => natural,
+        None => 1.0 / fps,
+    };
+    let frames = (duration * fps).round();
+    if frames < 1.0 || frames > MAX_FRAMES as f64 {
+        return invalid(
+            "timeline.duration",
+            format!(
+                "duration × fps must give 1 to {MAX_FRAMES} frames {}",
+                got(format!("{duration} s × {fps} fps = {frames} frames"))
+            ),
+        );
+    }
+    let timeline = Timeline {
+        fps,
+        frame_count: frames as u64,
+        path,
+    };
+    check_every_frame(&timeline)?;
+    Ok(timeline)
+}
+
+fn keyframes(keys: &[raw::Keyframe], camera: Option<Pose>) -> Check<Vec<Key>> {
+    if keys.is_empty() {
+        return invalid("timeline.keyframes", "needs at least one keyframe");
+    }
+    let mut out: Vec<Key> = Vec::with_capacity(keys.len());
+    for (i, k) in keys.iter().enumerate() {
+        let path = format!("timeline.keyframes[{i}]");
+        let time = number(&format!("{path}.time"), k.time)?;
+        if let Some(prev) = out.last()
+            && time <= prev.time
+        {
+            return invalid(
+                format!("{path}.time"),
+                format!(
+                    "keyframe times must increase strictly; keyframe {} is at {} {}",
+                    i - 1,
+                    prev.time,
+                    got(time)
+                ),
+            );
+        }
+        let before = out.last().map(|k| k.pose).or(camera);
+        let field = |name: &str, v: Option<raw::V3>, carried: Option<DVec3>| -> Check<DVec3> {
+            match (v, carried) {
+                (Some(v), _) => vector(&format!("{path}.{name}"), v),
+                (None, Some(c)) => Ok(c),
+                (None, None) => invalid(
+                    path.clone(),
+                    format!("the first keyframe needs `{name}` (or give a `camera:` section)"),
+                ),
+            }
+        };
+        let pose = Pose {
+            position: field("position", k.position, before.map(|p| p.position))?,
+            look_at: field("look_at", k.look_at, before.map(|p| p.look_at))?,
+            up: field("up", k.up, Some(before.map_or(DVec3::Y, |p| p.up)))?,
+            fov: match k.fov {
+                Some(f) => fov(&format!("{path}.fov"), f)?,
+                None => before.map_or(90.0, |p| p.fov),
+            },
+        };
+        check_pose(&path, &pose)?;
+        let ease = match k.ease.unwrap_or(raw::Ease::Linear) {
+            raw::Ease::Linear => Ease::Linear,
+            raw::Ease::In => Ease::In,
+            raw::Ease::Out => Ease::Out,
+            raw::Ease::InOut => Ease::InOut,
+        };
+        out.push(Key { time, pose, ease });
+    }
+    Ok(out)
+}
+
+fn orbit(o: &raw::Orbit, camera: Option<Pose>) -> Check<Orbit> {
+    let p = "timeline.orbit";
+    let center = vector(&format!("{p}.center"), o.center)?;
+    Ok(Orbit {
+        center,
+        radius: positive(&format!("{p}.radius"), o.radius)?,
+        height: number(&format!("{p}.height"), o.height)?,
+        start_angle: number(&format!("{p}.start_angle"), o.start_angle)?,
+        turns: number(&format!("{p}.turns"), o.turns.unwrap_or(1.0))?,
+        duration: positive(&format!("{p}.duration"), o.duration)?,
+        look_at: match o.look_at {
+            Some(v) => vector(&format!("{p}.look_at"), v)?,
+            None => center,
+        },
+        up: match o.up {
+            Some(v) => vector(&format!("{p}.up"), v)?,
+            None => camera.map_or(DVec3::Y, |c| c.up),
+        },
+        fov: match o.fov {
+            Some(f) => fov(&format!("{p}.fov"), f)?,
+            None => camera.map_or(90.0, |c| c.fov),
+        },
+    })
+}
+
+/// Interpolation can pass where no key is (a look-at flipping through up, a fov overshooting),
+/// so every frame's camera is built once here rather than failing mid-render.
+fn check_every_frame(t: &Timeline) -> Check<()> {
+    // Beyond this many frames the check would dominate loading; paths are smooth, so a dense
+    // sample (every frame up to the limit, then evenly spaced) still finds any bad stretch.
+    const FULL_CHECK: u64 = 1_000_000;
+    let step = t.frame_count.div_ceil(FULL_CHECK).max(1);
+    for n in (0..t.frame_count).step_by(step as usize) {
+        let pose = t.pose_of(n);
+        if let Err(e) = Camera::new(&pose) {
+            let (path, between) = match &t.path {
+                TimelinePath::Orbit(_) => ("timeline.orbit".to_string(), String::new()),
+                TimelinePath::Keys { keys, .. } => {
+                    let time = t.time_of(n);
+                    let k = keys.partition_point(|k| k.time <= time).saturating_sub(1);
+                    let next = (k + 1).min(keys.len() - 1);
+                    (
+                        format!("timeline.keyframes[{k}]"),
+                        format!(" between keyframes {k} and {next}"),
+                    )
+                }
+            };
+            return invalid(
+                path,
+                format!(
+                    "frame {n} (t = {} s){between}: {e} (position {}, look_at {}, up {}, fov {})",
+                    t.time_of(n),
+                    pose.position,
+                    pose.look_at,
+                    pose.up,
+                    pose.fov
+                ),
+            );
+        }
+    }
+    Ok(())
+}

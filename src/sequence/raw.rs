@@ -1,0 +1,238 @@
+//! Serde structs that mirror the YAML exactly. Nothing here is checked beyond its type;
+//! `sequence::load` validates and turns these into a `Scene`, a `Timeline` and `Settings`.
+
+use serde::Deserialize;
+use serde::de::{self, Deserializer, MapAccess, Visitor};
+use std::fmt;
+
+pub type V3 = [f64; 3];
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sequence {
+    #[serde(default)]
+    pub render: Render,
+    pub output: Option<String>,
+    pub camera: Option<Camera>,
+    #[serde(default)]
+    pub materials: NamedMaterials,
+    #[serde(default)]
+    pub objects: Vec<Object>,
+    #[serde(default)]
+    pub lights: Vec<Light>,
+    pub timeline: Option<Timeline>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Render {
+    pub width: Option<u64>,
+    pub height: Option<u64>,
+    pub max_depth: Option<u64>,
+    pub background: Option<V3>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    pub position: V3,
+    pub look_at: V3,
+    pub up: Option<V3>,
+    pub fov: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    #[serde(default)]
+    pub ambient: V3,
+    pub diffuse: V3,
+    #[serde(default)]
+    pub specular: V3,
+    pub shininess: Option<f64>,
+    #[serde(default)]
+    pub reflection: f64,
+}
+
+/// `materials:` keeps the user's order and rejects a name given twice (a plain map would
+/// silently keep the last one).
+#[derive(Debug, Default)]
+pub struct NamedMaterials(pub Vec<(String, Material)>);
+
+impl<'de> Deserialize<'de> for NamedMaterials {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = NamedMaterials;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a map from material names to materials")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+                let mut out: Vec<(String, Material)> = Vec::new();
+                while let Some(name) = map.next_key::<String>()? {
+                    if out.iter().any(|(n, _)| *n == name) {
+                        return Err(de::Error::custom(format!(
+                            "material `{name}` is defined twice"
+                        )));
+                    }
+                    out.push((name, map.next_value()?));
+                }
+                Ok(NamedMaterials(out))
+            }
+        }
+        d.deserialize_map(V)
+    }
+}
+
+/// `material: red` names an entry of `materials:`; `material: { diffuse: ... }` is inline.
+#[derive(Debug, Clone)]
+pub enum MaterialRef {
+    Named(String),
+    Inline(Box<Material>),
+}
+
+impl<'de> Deserialize<'de> for MaterialRef {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = MaterialRef;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a material name or an inline material map")
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<Self::Value, E> {
+                Ok(MaterialRef::Named(s.to_owned()))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+                Material::deserialize(de::value::MapAccessDeserializer::new(map))
+                    .map(|m| MaterialRef::Inline(Box::new(m)))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// One of `sphere:` or `plane:` (serde_yaml only reads enums as `!tags`, so the
+/// single-key form is a struct of options, checked for exactly one in `load`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Object {
+    pub sphere: Option<Sphere>,
+    pub plane: Option<Plane>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sphere {
+    pub center: V3,
+    pub radius: f64,
+    pub material: MaterialRef,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plane {
+    pub point: V3,
+    pub normal: V3,
+    pub material: MaterialRef,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Light {
+    pub point: Option<PointLight>,
+    pub directional: Option<DirectionalLight>,
+    pub spot: Option<SpotLight>,
+    pub ambient: Option<AmbientLight>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointLight {
+    pub position: V3,
+    #[serde(default)]
+    pub ambient: V3,
+    pub diffuse: V3,
+    pub specular: V3,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionalLight {
+    pub direction: V3,
+    #[serde(default)]
+    pub ambient: V3,
+    pub diffuse: V3,
+    pub specular: V3,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpotLight {
+    pub position: V3,
+    pub direction: V3,
+    pub inner_angle: f64,
+    pub outer_angle: f64,
+    #[serde(default)]
+    pub ambient: V3,
+    pub diffuse: V3,
+    pub specular: V3,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AmbientLight {
+    pub color: V3,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Timeline {
+    pub fps: Option<f64>,
+    pub duration: Option<f64>,
+    pub interpolation: Option<Interpolation>,
+    pub keyframes: Option<Vec<Keyframe>>,
+    pub orbit: Option<Orbit>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Interpolation {
+    Linear,
+    Smooth,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Ease {
+    Linear,
+    In,
+    Out,
+    InOut,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Keyframe {
+    pub time: f64,
+    pub position: Option<V3>,
+    pub look_at: Option<V3>,
+    pub up: Option<V3>,
+    pub fov: Option<f64>,
+    pub ease: Option<Ease>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Orbit {
+    pub center: V3,
+    pub radius: f64,
+    #[serde(default)]
+    pub height: f64,
+    #[serde(default)]
+    pub start_angle: f64,
+    pub turns: Option<f64>,
+    pub duration: f64,
+    pub look_at: Option<V3>,
+    pub up: Option<V3>,
+    pub fov: Option<f64>,
+}
