@@ -9,6 +9,9 @@ pub struct Frame {
     pub rgb: Vec<f32>,
     /// Distance along the eye ray to the first hit (+inf for background), when asked for.
     pub depth: Option<Vec<f32>>,
+    /// Colour values the tracer produced as NaN or beyond f32 and that were replaced before
+    /// storing; the test suite asserts this stays 0 on every extreme scene.
+    pub non_finite: u64,
 }
 
 impl Frame {
@@ -48,6 +51,7 @@ mod tests {
             height: 1,
             rgb: vec![0.0, 0.5, 1.0, -3.0, 7.0, 0.2],
             depth: None,
+            non_finite: 0,
         };
         assert_eq!(f.to_rgb8(), vec![0, 128, 255, 0, 255, 51]);
         assert_eq!(f.to_rgb16()[1], 32768);
