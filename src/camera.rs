@@ -26,6 +26,10 @@ pub enum Degenerate {
     UpParallel,
     #[error("fov must be in (0, 180) degrees")]
     Fov,
+    #[error(
+        "the view swings past up since the previous frame, so the camera rolls over (more than 60° in one frame); move the path or look_at away from the up axis, or change up"
+    )]
+    Flip,
 }
 
 /// An orthonormal camera frame, ready to make rays.

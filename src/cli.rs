@@ -1,5 +1,8 @@
 //! Command-line definitions (clap) and frame specs (`7`, `0-23`, `0-100:5`, `1-100x2`, `1,3,7-9`).
 
+use crate::output::exr::Precision;
+use crate::output::png::Compression;
+use crate::output::stream::StreamFormat;
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
@@ -8,6 +11,9 @@ Examples:
   rayreel render sequences/orbit.yaml
   rayreel render sequences/talk.yaml --size 640x360 --output /tmp/talk/frame_####.png
   rayreel render sequences/orbit.yaml --frames 0-47:2 --threads 2
+  rayreel render sequences/orbit.yaml --output frames/orbit/frame_####.exr --depth
+  rayreel render sequences/orbit.yaml --pipe raw --quiet | ffmpeg -f rawvideo -pix_fmt rgb24 -s 1280x720 -r 24 -i - -c:v libx264 -pix_fmt yuv420p orbit.mp4
+  rayreel render sequences/orbit.yaml --dry-run
   rayreel check sequences/flyby.yaml";
 
 #[derive(Debug, Parser)]
@@ -54,6 +60,32 @@ pub struct RenderArgs {
     /// No progress bar and no per-frame lines.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Stream frames to stdout (raw rgb24/rgb48le or PNGs) for ffmpeg; files are then only
+    /// written when --output is given too.
+    #[arg(long, value_name = "FORMAT")]
+    pub pipe: Option<StreamFormat>,
+    /// Print (on stderr) the ffmpeg command that reads the --pipe stream.
+    #[arg(long)]
+    pub print_ffmpeg: bool,
+    /// Bits per channel of PNG files and streams.
+    #[arg(long, value_name = "BITS", default_value = "8", value_parser = ["8", "16"])]
+    pub bit_depth: String,
+    /// Float precision of the R, G, B channels of EXR files.
+    #[arg(long, value_name = "PRECISION", value_enum, default_value_t = Precision::Half)]
+    pub exr_precision: Precision,
+    /// PNG compression level.
+    #[arg(long, value_name = "LEVEL", value_enum, default_value_t = Compression::Fast)]
+    pub png_compression: Compression,
+    /// Add a Z channel (eye-ray distance) to EXR files (same as render.depth: true).
+    #[arg(long)]
+    pub depth: bool,
+    /// Print which frames are up to date, stale, missing, corrupt or foreign, and render nothing.
+    #[arg(long)]
+    pub dry_run: bool,
+    /// Render and overwrite every selected frame, even up-to-date ones and files rayreel did
+    /// not write.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `WxH` with both parts positive integers.

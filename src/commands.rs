@@ -2,12 +2,14 @@
 
 use crate::Error;
 use crate::cli::{CheckArgs, Cli, Command, RenderArgs};
-use crate::output::pattern::Pattern;
+use crate::output::{self, FileFormat, pattern::Pattern, stream::StreamFormat};
+use crate::plan::{self, Plan};
 use crate::progress::Progress;
 use crate::scene::{Light, Shape};
-use crate::schedule::{self, Job};
+use crate::schedule::{self, Files, Job, Outcome, Task};
 use crate::sequence::{self, Overrides, Sequence};
 use crate::timeline::Path as TimelinePath;
+use std::path::Path;
 use std::sync::Arc;
 
 pub fn run(cli: Cli) -> Result<(), Error> {
@@ -22,7 +24,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         size: args.size,
         max_depth: args.max_depth,
         output: args.output.clone(),
-        depth: false,
+        depth: args.depth,
     };
     let seq = sequence::load(&args.file, &overrides)?;
     let count = seq.timeline.frame_count;
@@ -32,39 +34,173 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
         None => (0..count).collect(),
     };
-    let pattern = Pattern::new(&seq.output, count).map_err(Error::Usage)?;
-    match pattern.extension().as_str() {
-        "png" => {}
-        other => {
-            return Err(Error::Usage(format!(
-                "output `{}`: unsupported file type `.{other}` (use .png)",
-                seq.output
-            )));
-        }
+    let sixteen = args.bit_depth == "16";
+    // With --pipe the stream is the product; files come too only when asked for explicitly.
+    let files = if args.pipe.is_none() || args.output.is_some() {
+        Some(file_sink(&seq, &args, sixteen)?)
+    } else {
+        None
+    };
+    let stream = args.pipe.map(|p| (p, sixteen));
+    let plan = files
+        .as_ref()
+        .map(|f| prepare(&seq, &frames, f, args.force))
+        .transpose()?;
+    if args.dry_run {
+        print_dry_run(plan.as_ref(), &frames);
+        return Ok(());
     }
-    if let Some(dir) = pattern
-        .frame_path(0)
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-    {
-        std::fs::create_dir_all(dir).map_err(|e| {
-            Error::Failed(format!("{}: cannot create directory: {e}", dir.display()))
-        })?;
-    }
+    let tasks = tasks(&frames, plan.as_ref(), stream.is_some());
     let threads = match args.threads {
         Some(t) => usize::from(t),
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
-    let mut progress = Progress::new(frames.len() as u64, count, args.quiet);
+    let mut progress = Progress::new(tasks.len() as u64, count, args.quiet);
+    if let Some(plan) = &plan {
+        progress.note(&plan.summary());
+        warn_foreign(&progress, plan, files.as_ref().expect("plan has files"));
+    }
+    if let Some((format, sixteen)) = stream {
+        stream_notes(&progress, &seq, format, sixteen, args.print_ffmpeg);
+    }
+    schedule::install_interrupt_handler();
     let job = Job {
         sequence: Arc::new(seq),
-        frames,
-        pattern,
+        tasks,
+        files,
+        stream,
         threads,
     };
-    let result = schedule::run(job, &mut progress);
+    let outcome = schedule::run(job, &mut progress);
     progress.finish();
-    result.map_err(Error::Failed)
+    finish(outcome, plan.as_ref())
+}
+
+/// The file pattern and format, with directories created and our stale temporaries removed.
+fn file_sink(seq: &Sequence, args: &RenderArgs, sixteen: bool) -> Result<Files, Error> {
+    let pattern = Pattern::new(&seq.output, seq.timeline.frame_count).map_err(Error::Usage)?;
+    let format = FileFormat::for_extension(
+        &pattern.extension(),
+        sixteen,
+        args.png_compression,
+        args.exr_precision,
+    )
+    .map_err(|e| Error::Usage(format!("output `{}`: {e}", seq.output)))?;
+    if matches!(format, FileFormat::Exr { .. }) && sixteen {
+        return Err(Error::Usage(
+            "--bit-depth 16 applies to PNG files and streams; EXR frames are float".into(),
+        ));
+    }
+    if seq.settings.depth && !matches!(format, FileFormat::Exr { .. }) {
+        return Err(Error::Usage(format!(
+            "--depth (render.depth) needs EXR frames to hold the Z channel; `{}` is not .exr",
+            seq.output
+        )));
+    }
+    let dir = pattern
+        .frame_path(0)
+        .parent()
+        .map(|d| d.to_path_buf())
+        .unwrap_or_default();
+    if !dir.as_os_str().is_empty() {
+        std::fs::create_dir_all(&dir).map_err(|e| {
+            Error::Failed(format!("{}: cannot create directory: {e}", dir.display()))
+        })?;
+    }
+    output::atomic::clean_leftovers(if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        &dir
+    });
+    Ok(Files { pattern, format })
+}
+
+fn prepare(seq: &Sequence, frames: &[u64], files: &Files, force: bool) -> Result<Plan, Error> {
+    Ok(plan::plan(seq, frames, files, force))
+}
+
+fn print_dry_run(plan: Option<&Plan>, frames: &[u64]) {
+    match plan {
+        Some(plan) => {
+            println!("{}", plan.summary());
+            println!("would render: {}", plan::compress(&plan.to_render()));
+        }
+        None => println!("would stream frames: {}", plan::compress(frames)),
+    }
+}
+
+/// Every selected frame when streaming (files written only where the plan says), otherwise
+/// just the frames the plan renders.
+fn tasks(frames: &[u64], plan: Option<&Plan>, streaming: bool) -> Vec<Task> {
+    let Some(plan) = plan else {
+        return frames
+            .iter()
+            .map(|&frame| Task {
+                frame,
+                write_file: false,
+            })
+            .collect();
+    };
+    plan.frames
+        .iter()
+        .filter(|(_, s)| streaming || plan.renders(s))
+        .map(|(frame, s)| Task {
+            frame: *frame,
+            write_file: plan.renders(s),
+        })
+        .collect()
+}
+
+fn warn_foreign(progress: &Progress, plan: &Plan, files: &Files) {
+    for n in plan.blocked() {
+        progress.warn(&format!(
+            "{}: not written by rayreel (no fingerprint); leaving it alone (use --force to overwrite)",
+            files.pattern.frame_path(n).display()
+        ));
+    }
+}
+
+fn stream_notes(
+    progress: &Progress,
+    seq: &Sequence,
+    format: StreamFormat,
+    sixteen: bool,
+    print: bool,
+) {
+    let (w, h) = (seq.settings.width, seq.settings.height);
+    let command = output::stream::ffmpeg_command(format, sixteen, w, h, seq.timeline.fps);
+    if print {
+        eprintln!("{command}");
+    }
+    if w % 2 == 1 || h % 2 == 1 {
+        progress.warn(&format!(
+            "note: {w}x{h} is odd, and yuv420p video needs even sizes: give ffmpeg -vf pad=ceil(iw/2)*2:ceil(ih/2)*2"
+        ));
+    }
+}
+
+fn finish(outcome: Result<Outcome, String>, plan: Option<&Plan>) -> Result<(), Error> {
+    match outcome.map_err(Error::Failed)? {
+        Outcome::Complete => {
+            let blocked = plan.map(Plan::blocked).unwrap_or_default();
+            if blocked.is_empty() {
+                Ok(())
+            } else {
+                Err(Error::Failed(format!(
+                    "frames {} were not written: files rayreel did not write are in the way (use --force to overwrite them)",
+                    plan::compress(&blocked)
+                )))
+            }
+        }
+        Outcome::Interrupted { written } => Err(Error::Interrupted(format!(
+            "interrupted: {written} frame{} written in this run; run the same command again to render the rest",
+            if written == 1 { "" } else { "s" }
+        ))),
+        Outcome::ReaderClosed { streamed } => {
+            eprintln!("rayreel: the reader closed the stream after {streamed} frames; stopping");
+            Ok(())
+        }
+    }
 }
 
 fn check(args: CheckArgs) -> Result<(), Error> {

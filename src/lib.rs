@@ -5,6 +5,7 @@ pub mod camera;
 pub mod cli;
 pub mod frame;
 pub mod output;
+pub mod plan;
 pub mod progress;
 pub mod scene;
 pub mod schedule;
@@ -28,6 +29,9 @@ pub enum Error {
     /// Rendering or writing failed (exit 1).
     #[error("{0}")]
     Failed(String),
+    /// Ctrl-C or SIGTERM (exit 130).
+    #[error("{0}")]
+    Interrupted(String),
 }
 
 impl Error {
@@ -35,6 +39,7 @@ impl Error {
         match self {
             Error::Load(_) | Error::Usage(_) => 2,
             Error::Failed(_) => 1,
+            Error::Interrupted(_) => 130,
         }
     }
 }

@@ -3,7 +3,6 @@
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::Path;
 use std::time::{Duration, Instant};
 
 pub struct Progress {
@@ -58,19 +57,24 @@ impl Progress {
         }
     }
 
-    pub fn frame_done(&mut self, n: u64, path: &Path, seconds: f64) {
+    /// A warning: shown even with `--quiet`.
+    pub fn warn(&self, text: &str) {
+        match &self.mode {
+            Mode::Bar(bar) => bar.println(text),
+            _ => eprintln!("{text}"),
+        }
+    }
+
+    pub fn frame_done(&mut self, n: u64, destination: &str, seconds: f64) {
         self.done += 1;
         match &self.mode {
             Mode::Quiet => {}
             Mode::Lines => eprintln!(
-                "frame {n}/{} written {} ({seconds:.2} s, {} of {} done)",
-                self.sequence_frames,
-                path.display(),
-                self.done,
-                self.total
+                "frame {n}/{} written {destination} ({seconds:.2} s, {} of {} done)",
+                self.sequence_frames, self.done, self.total
             ),
             Mode::Bar(bar) => {
-                bar.set_message(format!("{}", path.display()));
+                bar.set_message(destination.to_string());
                 bar.inc(1);
             }
         }
@@ -82,7 +86,10 @@ impl Progress {
         if let Mode::Bar(bar) = &self.mode {
             bar.finish_and_clear();
         }
-        if !matches!(self.mode, Mode::Quiet) {
+        if matches!(self.mode, Mode::Quiet) || self.total == 0 {
+            return;
+        }
+        {
             let rate = if wall > 0.0 {
                 self.done as f64 / wall
             } else {

@@ -1,81 +1,295 @@
 //! The frame scheduler: renders the selected frames on a rayon pool, a bounded window of frames
 //! at a time (rows of each frame are parallel too), so both cores stay busy from the first
 //! frame to the last, the first file appears early, and memory does not grow with the length
-//! of the sequence.
+//! of the sequence or with a slow reader. Workers only compute (render, encode); this thread
+//! does all I/O: atomic file writes as frames finish, the stream strictly in frame order.
 
 use crate::camera::Camera;
-use crate::output::{atomic, pattern::Pattern, png};
+use crate::frame::Frame;
+use crate::output::{
+    self, FileFormat, FrameMeta, fingerprint, pattern::Pattern, stream::StreamFormat,
+};
 use crate::progress::Progress;
 use crate::sequence::Sequence;
 use crate::tracer;
-use std::path::PathBuf;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, mpsc};
 use std::time::Instant;
 
-/// What one `render` run does.
+/// Where frame files go and in which format.
+#[derive(Clone)]
+pub struct Files {
+    pub pattern: Pattern,
+    pub format: FileFormat,
+}
+
+/// One frame of a run: its number, and whether its file must be written (with a stream, frames
+/// whose files are up to date are still rendered for the stream but not rewritten).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Task {
+    pub frame: u64,
+    pub write_file: bool,
+}
+
 pub struct Job {
     pub sequence: Arc<Sequence>,
     /// Ascending frame numbers, each inside the timeline.
-    pub frames: Vec<u64>,
-    pub pattern: Pattern,
+    pub tasks: Vec<Task>,
+    pub files: Option<Files>,
+    pub stream: Option<(StreamFormat, bool)>,
     pub threads: usize,
+}
+
+/// How a run ended when nothing failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    Complete,
+    /// Ctrl-C or SIGTERM: frames in flight were finished, nothing new was started.
+    Interrupted {
+        written: usize,
+    },
+    /// The stream's reader closed the pipe; the remaining work was cancelled.
+    ReaderClosed {
+        streamed: usize,
+    },
 }
 
 /// Frames rendered in parallel beyond one per thread: enough to hide encoding and writing
 /// behind rendering, few enough that memory stays a handful of frames.
-const EXTRA_IN_FLIGHT: usize = 1;
+const EXTRA_IN_FLIGHT: usize = 2;
 
-pub fn run(job: Job, progress: &mut Progress) -> Result<(), String> {
+struct Done {
+    frame: u64,
+    seconds: f64,
+    file: Option<Vec<u8>>,
+    stream: Option<Vec<u8>>,
+}
+
+pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, String> {
+    return_frame_buffers_to_the_os();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(job.threads)
         .thread_name(|i| format!("rayreel-{i}"))
         .build()
         .map_err(|e| format!("cannot start worker threads: {e}"))?;
+    let run_hash = job
+        .files
+        .as_ref()
+        .map(|f| fingerprint::of_run(&job.sequence.scene, &job.sequence.settings, &f.format));
     let window = job.threads + EXTRA_IN_FLIGHT;
-    let (tx, rx) = mpsc::channel::<(u64, PathBuf, f64, Result<(), String>)>();
-    let mut pending = job.frames.iter().copied();
-    let mut in_flight = 0;
-    let mut failure: Option<String> = None;
+    let (tx, rx) = mpsc::channel::<Result<Done, String>>();
+    let mut pending = job.tasks.iter().copied();
+    let mut stream = job.stream.map(|_| Reorder::new(&job.tasks));
+    let (mut in_flight, mut written) = (0, 0);
+    let mut stop: Option<Result<Outcome, String>> = None;
     loop {
-        while failure.is_none() && in_flight < window {
-            let Some(n) = pending.next() else { break };
-            let (tx, seq, path) = (
+        while stop.is_none() && in_flight < window {
+            if interrupted() {
+                stop = Some(Ok(Outcome::Interrupted { written: 0 }));
+                break;
+            }
+            let Some(task) = pending.next() else { break };
+            let (tx, seq, files, run_hash) = (
                 tx.clone(),
                 Arc::clone(&job.sequence),
-                job.pattern.frame_path(n),
+                job.files.clone(),
+                run_hash,
             );
+            let stream_format = job.stream;
             in_flight += 1;
             pool.spawn(move || {
-                let start = Instant::now();
-                let result = render_to_file(&seq, n, &path);
-                let _ = tx.send((n, path, start.elapsed().as_secs_f64(), result));
+                let done = produce(
+                    &seq,
+                    task,
+                    files.as_ref().zip(run_hash.as_ref()),
+                    stream_format,
+                );
+                let _ = tx.send(done);
             });
         }
         if in_flight == 0 {
             break;
         }
-        let (n, path, seconds, result) = rx.recv().map_err(|e| format!("worker lost: {e}"))?;
+        let done = rx.recv().map_err(|e| format!("worker lost: {e}"))?;
         in_flight -= 1;
-        match result {
-            Ok(()) => progress.frame_done(n, &path, seconds),
+        let done = match done {
+            Ok(d) => d,
             Err(e) => {
-                failure.get_or_insert(e);
+                stop.get_or_insert(Err(e));
+                continue;
+            }
+        };
+        if let (Some(bytes), Some(files)) = (&done.file, &job.files) {
+            let path = files.pattern.frame_path(done.frame);
+            if let Err(e) = output::atomic::write_atomic(&path, bytes) {
+                stop.get_or_insert(Err(format!("{}: cannot write: {e}", path.display())));
+                continue;
+            }
+            written += 1;
+            progress.frame_done(done.frame, &path.display().to_string(), done.seconds);
+        }
+        if let (Some(order), Some(bytes)) = (stream.as_mut(), done.stream) {
+            if stop
+                .as_ref()
+                .is_some_and(|s| matches!(s, Ok(Outcome::ReaderClosed { .. })))
+            {
+                continue;
+            }
+            match order.push(done.frame, bytes, done.seconds) {
+                Ok(sent) => {
+                    for (frame, seconds) in sent.into_iter().filter(|_| done.file.is_none()) {
+                        progress.frame_done(frame, "to stdout", seconds);
+                    }
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                    stop = Some(Ok(Outcome::ReaderClosed {
+                        streamed: order.sent,
+                    }));
+                }
+                Err(e) => {
+                    stop.get_or_insert(Err(format!("stdout: cannot write the stream: {e}")));
+                }
             }
         }
     }
-    failure.map_or(Ok(()), Err)
+    match stop {
+        None => Ok(Outcome::Complete),
+        Some(Ok(Outcome::Interrupted { .. })) => Ok(Outcome::Interrupted { written }),
+        Some(other) => other,
+    }
 }
 
 /// Renders frame `n` of the sequence.
-pub fn render_frame(seq: &Sequence, n: u64) -> Result<crate::frame::Frame, String> {
+pub fn render_frame(seq: &Sequence, n: u64) -> Result<Frame, String> {
     let pose = seq.timeline.pose_of(n);
     let camera = Camera::new(&pose).map_err(|e| format!("frame {n}: {e}"))?;
     Ok(tracer::render(&seq.scene, &camera, &seq.settings))
 }
 
-fn render_to_file(seq: &Sequence, n: u64, path: &std::path::Path) -> Result<(), String> {
+/// A worker's whole job for one frame: render, then encode for each sink that wants it.
+fn produce(
+    seq: &Sequence,
+    task: Task,
+    files: Option<(&Files, &fingerprint::Hasher)>,
+    stream: Option<(StreamFormat, bool)>,
+) -> Result<Done, String> {
+    let start = Instant::now();
+    let n = task.frame;
     let frame = render_frame(seq, n)?;
-    let bytes =
-        png::encode(&frame).map_err(|e| format!("{}: cannot encode PNG: {e}", path.display()))?;
-    atomic::write_atomic(path, &bytes).map_err(|e| format!("{}: cannot write: {e}", path.display()))
+    let file = match files.filter(|_| task.write_file) {
+        Some((files, run_hash)) => {
+            let meta = frame_meta(seq, n, run_hash);
+            let path = files.pattern.frame_path(n);
+            Some(
+                output::encode_file(&frame, &files.format, &meta)
+                    .map_err(|e| format!("{}: cannot encode: {e}", path.display()))?,
+            )
+        }
+        None => None,
+    };
+    let stream = match stream {
+        Some((format, sixteen)) => Some(
+            output::stream::encode(&frame, format, sixteen)
+                .map_err(|e| format!("frame {n}: cannot encode the stream: {e}"))?,
+        ),
+        None => None,
+    };
+    Ok(Done {
+        frame: n,
+        seconds: start.elapsed().as_secs_f64(),
+        file,
+        stream,
+    })
+}
+
+pub fn frame_meta(seq: &Sequence, n: u64, run_hash: &fingerprint::Hasher) -> FrameMeta {
+    FrameMeta {
+        frame: n,
+        time: seq.timeline.time_of(n),
+        fps: seq.timeline.fps,
+        fingerprint: fingerprint::of_frame(run_hash, &seq.timeline.pose_of(n)),
+    }
+}
+
+/// Puts stream bytes on stdout strictly in frame order, holding early arrivals.
+struct Reorder {
+    order: Vec<u64>,
+    next: usize,
+    held: BTreeMap<u64, (Vec<u8>, f64)>,
+    sent: usize,
+}
+
+impl Reorder {
+    fn new(tasks: &[Task]) -> Reorder {
+        Reorder {
+            order: tasks.iter().map(|t| t.frame).collect(),
+            next: 0,
+            held: BTreeMap::new(),
+            sent: 0,
+        }
+    }
+
+    /// Holds `bytes` of `frame` and writes every frame now due; returns those frames with
+    /// their render times.
+    fn push(
+        &mut self,
+        frame: u64,
+        bytes: Vec<u8>,
+        seconds: f64,
+    ) -> std::io::Result<Vec<(u64, f64)>> {
+        self.held.insert(frame, (bytes, seconds));
+        let mut out = std::io::stdout().lock();
+        let mut sent = Vec::new();
+        while let Some(&n) = self.order.get(self.next) {
+            let Some((bytes, seconds)) = self.held.remove(&n) else {
+                break;
+            };
+            out.write_all(&bytes)?;
+            self.next += 1;
+            self.sent += 1;
+            sent.push((n, seconds));
+        }
+        out.flush()?;
+        Ok(sent)
+    }
+}
+
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::SeqCst)
+}
+
+/// The first Ctrl-C or SIGTERM asks the run to stop after the frames in flight; a second one
+/// exits at once (a later run removes any temporary file that leaves behind).
+pub fn install_interrupt_handler() {
+    extern "C" fn on_signal(_: libc::c_int) {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            // SAFETY: _exit is async-signal-safe.
+            unsafe { libc::_exit(130) };
+        }
+    }
+    for signal in [libc::SIGINT, libc::SIGTERM] {
+        // SAFETY: installs a handler that only touches an atomic and calls _exit.
+        unsafe {
+            let mut action: libc::sigaction = std::mem::zeroed();
+            action.sa_sigaction = on_signal as *const () as usize;
+            action.sa_flags = libc::SA_RESTART;
+            libc::sigemptyset(&mut action.sa_mask);
+            libc::sigaction(signal, &action, std::ptr::null_mut());
+        }
+    }
+}
+
+/// Frame buffers are large and short-lived. glibc raises its mmap threshold after the first
+/// ones are freed and then keeps such blocks in fragmented arenas, so peak memory creeps up
+/// with the length of a sequence; a fixed threshold maps and unmaps each buffer instead.
+fn return_frame_buffers_to_the_os() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only tunes the allocator; called before the worker threads allocate.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 256 * 1024);
+    }
 }

@@ -1,6 +1,110 @@
 //! Sinks: where finished frames go. Encoders turn a frame into bytes without I/O; `atomic`
-//! puts bytes under a final name only once they are complete on disk.
+//! puts bytes under a final name only once they are complete on disk; `inspect` tells what an
+//! existing frame file is, so a rerun can resume.
 
 pub mod atomic;
+pub mod exr;
+pub mod fingerprint;
 pub mod pattern;
 pub mod png;
+pub mod stream;
+
+use crate::frame::Frame;
+use std::path::Path;
+
+/// The file format of the frames, with every option that changes their bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum FileFormat {
+    Png {
+        sixteen_bit: bool,
+        compression: png::Compression,
+    },
+    Exr {
+        precision: exr::Precision,
+    },
+}
+
+impl FileFormat {
+    /// From the pattern's extension and the format flags.
+    pub fn for_extension(
+        ext: &str,
+        sixteen_bit: bool,
+        compression: png::Compression,
+        precision: exr::Precision,
+    ) -> Result<FileFormat, String> {
+        match ext {
+            "png" => Ok(FileFormat::Png {
+                sixteen_bit,
+                compression,
+            }),
+            "exr" => Ok(FileFormat::Exr { precision }),
+            other => Err(format!(
+                "unsupported file type `.{other}` (use .png or .exr)"
+            )),
+        }
+    }
+
+    /// What decides the decoded content (compression only changes how it is packed).
+    pub fn content(&self) -> String {
+        match self {
+            FileFormat::Png { sixteen_bit, .. } => {
+                format!("png{}", if *sixteen_bit { 16 } else { 8 })
+            }
+            FileFormat::Exr { precision } => format!("exr-{precision:?}"),
+        }
+    }
+}
+
+/// What a frame file records about itself.
+#[derive(Debug, Clone)]
+pub struct FrameMeta {
+    pub frame: u64,
+    pub time: f64,
+    pub fps: f64,
+    pub fingerprint: String,
+}
+
+pub fn encode_file(
+    frame: &Frame,
+    format: &FileFormat,
+    meta: &FrameMeta,
+) -> Result<Vec<u8>, String> {
+    match *format {
+        FileFormat::Png {
+            sixteen_bit,
+            compression,
+        } => {
+            let text = [
+                (fingerprint::KEY, meta.fingerprint.clone()),
+                ("rayreel:frame", meta.frame.to_string()),
+                ("rayreel:time", format!("{}", meta.time)),
+            ];
+            png::encode(frame, sixteen_bit, compression, &text)
+        }
+        FileFormat::Exr { precision } => exr::encode(frame, precision, meta),
+    }
+}
+
+/// What is at a frame path before rendering.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Existing {
+    Missing,
+    /// A complete file written by rayreel, with its fingerprint.
+    Ours(String),
+    /// A complete image without our fingerprint: someone else's, never overwritten unforced.
+    Foreign,
+    /// Truncated, damaged or not an image at all.
+    Corrupt(String),
+}
+
+pub fn inspect(path: &Path, format: &FileFormat) -> Existing {
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Existing::Missing,
+        Err(e) => return Existing::Corrupt(format!("unreadable: {e}")),
+    };
+    match format {
+        FileFormat::Png { .. } => png::inspect(&bytes),
+        FileFormat::Exr { .. } => exr::inspect(&bytes),
+    }
+}

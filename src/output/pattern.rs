@@ -13,6 +13,9 @@ pub struct Pattern {
 impl Pattern {
     /// `frame_count` decides the minimum width; a pattern without `#` only suits one frame.
     pub fn new(pattern: &str, frame_count: u64) -> Result<Pattern, String> {
+        if pattern.trim().is_empty() {
+            return Err("the output pattern is empty".into());
+        }
         let Some(end) = pattern.rfind('#') else {
             if frame_count > 1 {
                 return Err(format!(

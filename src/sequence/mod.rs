@@ -9,6 +9,7 @@ mod locate;
 pub mod raw;
 
 use crate::camera::{Camera, Degenerate, Pose};
+use crate::output::pattern::Pattern;
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
 use crate::timeline::{Ease, Interpolation, Key, Orbit, Path as TimelinePath, Timeline};
 use crate::tracer::Settings;
@@ -26,6 +27,8 @@ pub const MAX_SHININESS: f64 = 1e6;
 pub const MAX_COLOR: f64 = 1e6;
 /// Largest number of frames a timeline may have.
 pub const MAX_FRAMES: u64 = 10_000_000;
+/// A camera that rolls more than this between consecutive frames is flipping over.
+pub const MAX_ROLL_PER_FRAME_DEGREES: f64 = 60.0;
 /// Largest frames per second accepted.
 pub const MAX_FPS: f64 = 1000.0;
 
@@ -145,6 +148,7 @@ fn apply(seq: &mut Sequence, o: &Overrides) -> Result<(), LoadError> {
         seq.settings.max_depth = max_depth(d).map_err(|m| flag("--max-depth", m))?;
     }
     if let Some(out) = &o.output {
+        Pattern::new(out, seq.timeline.frame_count).map_err(|m| flag("--output", m))?;
         seq.output = out.clone();
     }
     seq.settings.depth |= o.depth;
@@ -202,13 +206,15 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<Sequence> {
             lights,
             background,
         },
-        timeline,
         settings,
         output: match raw.output {
-            Some(o) if o.trim().is_empty() => return invalid("output", "must not be empty"),
-            Some(o) => o,
+            Some(o) => {
+                Pattern::new(&o, timeline.frame_count).or_else(|m| invalid("output", m))?;
+                o
+            }
             None => format!("frames/{name}/frame_####.png"),
         },
+        timeline,
     })
 }
 
@@ -218,7 +224,7 @@ fn render_settings(r: &raw::Render) -> Check<Settings> {
         width: check("render.width", dimension(r.width.unwrap_or(1280)))?,
         height: check("render.height", dimension(r.height.unwrap_or(720)))?,
         max_depth: check("render.max_depth", max_depth(r.max_depth.unwrap_or(3)))?,
-        depth: false,
+        depth: r.depth.unwrap_or(false),
     })
 }
 
@@ -482,7 +488,7 @@ fn camera_pose(c: &raw::Camera) -> Check<Pose> {
     let pose = Pose {
         position: vector("camera.position", c.position)?,
         look_at: vector("camera.look_at", c.look_at)?,
-        up: vector("camera.up", c.up.unwrap_or([0.0, 1.0, 0.0]))?,
+        up: unit("camera.up", c.up.unwrap_or([0.0, 1.0, 0.0]))?,
         fov: fov("camera.fov", c.fov.unwrap_or(90.0))?,
     };
     check_pose("camera", &pose)?;
@@ -494,7 +500,7 @@ fn check_pose(path: &str, pose: &Pose) -> Check<()> {
     Camera::new(pose).map(|_| ()).or_else(|e| {
         let field = match e {
             Degenerate::NoViewDirection => "look_at",
-            Degenerate::UpParallel => "up",
+            Degenerate::UpParallel | Degenerate::Flip => "up",
             Degenerate::Fov => "fov",
         };
         invalid(
@@ -597,6 +603,7 @@ fn keyframes(keys: &[raw::Keyframe], camera: Option<Pose>) -> Check<Vec<Key>> {
         let before = out.last().map(|k| k.pose).or(camera);
         let field = |name: &str, v: Option<raw::V3>, carried: Option<DVec3>| -> Check<DVec3> {
             match (v, carried) {
+                (Some(v), _) if name == "up" => unit(&format!("{path}.{name}"), v),
                 (Some(v), _) => vector(&format!("{path}.{name}"), v),
                 (None, Some(c)) => Ok(c),
                 (None, None) => invalid(
@@ -641,7 +648,7 @@ fn orbit(o: &raw::Orbit, camera: Option<Pose>) -> Check<Orbit> {
             None => center,
         },
         up: match o.up {
-            Some(v) => vector(&format!("{p}.up"), v)?,
+            Some(v) => unit(&format!("{p}.up"), v)?,
             None => camera.map_or(DVec3::Y, |c| c.up),
         },
         fov: match o.fov {
@@ -658,9 +665,21 @@ fn check_every_frame(t: &Timeline) -> Check<()> {
     // sample (every frame up to the limit, then evenly spaced) still finds any bad stretch.
     const FULL_CHECK: u64 = 1_000_000;
     let step = t.frame_count.div_ceil(FULL_CHECK).max(1);
+    let mut previous_right: Option<DVec3> = None;
     for n in (0..t.frame_count).step_by(step as usize) {
         let pose = t.pose_of(n);
-        if let Err(e) = Camera::new(&pose) {
+        // A view that swings through or close by `up` between two frames flips the picture
+        // over even though no sampled frame is degenerate: the right vector whips round.
+        let camera = Camera::new(&pose).and_then(|c| match previous_right {
+            Some(r) if r.dot(c.right) < MAX_ROLL_PER_FRAME_DEGREES.to_radians().cos() => {
+                Err(Degenerate::Flip)
+            }
+            _ => Ok(c),
+        });
+        if let Ok(c) = &camera {
+            previous_right = Some(c.right);
+        }
+        if let Err(e) = camera {
             let (path, between) = match &t.path {
                 TimelinePath::Orbit(_) => ("timeline.orbit".to_string(), String::new()),
                 TimelinePath::Keys { keys, .. } => {

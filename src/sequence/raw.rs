@@ -30,6 +30,7 @@ pub struct Render {
     pub height: Option<u64>,
     pub max_depth: Option<u64>,
     pub background: Option<V3>,
+    pub depth: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -57,3 +57,29 @@ pub fn read_png(path: &Path) -> (u32, u32, Vec<u8>) {
     let rgb = img.to_rgb8();
     (rgb.width(), rgb.height(), rgb.into_raw())
 }
+
+/// Whether an external tool is on PATH. When it is not: panic if RAYREEL_REQUIRE_TOOLS=1
+/// (CI installs every tool), otherwise print a notice and let the caller skip.
+pub fn have_tool(name: &str) -> bool {
+    let found = Command::new("sh")
+        .args(["-c", &format!("command -v {name}")])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !found {
+        if std::env::var("RAYREEL_REQUIRE_TOOLS").as_deref() == Ok("1") {
+            panic!("{name} is required (RAYREEL_REQUIRE_TOOLS=1) but not installed");
+        }
+        eprintln!("SKIPPED: {name} is not installed");
+    }
+    found
+}
+
+/// Runs a shell pipeline in `dir`, returning its output.
+pub fn sh(dir: &Path, script: &str) -> Output {
+    Command::new("bash")
+        .args(["-o", "pipefail", "-c", script])
+        .current_dir(dir)
+        .env("RAYREEL", env!("CARGO_BIN_EXE_rayreel"))
+        .output()
+        .expect("bash runs")
+}

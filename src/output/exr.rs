@@ -1,0 +1,91 @@
+//! OpenEXR frames: the linear, unclamped colour as R, G, B (half floats by default, 32-bit on
+//! request), an optional Z channel (eye-ray distance, +inf for background, always 32-bit), ZIP
+//! compression, and header attributes for the frame number, time, fps and fingerprint.
+
+use super::{Existing, FrameMeta, fingerprint};
+use crate::frame::Frame;
+use exr::prelude::*;
+use std::io::Cursor;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum Precision {
+    /// 16-bit half floats.
+    Half,
+    /// 32-bit floats.
+    Float,
+}
+
+pub fn encode(
+    frame: &Frame,
+    precision: Precision,
+    meta: &FrameMeta,
+) -> std::result::Result<Vec<u8>, String> {
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let plane = |c: usize| -> Vec<f32> { frame.rgb.iter().skip(c).step_by(3).copied().collect() };
+    let samples = |v: Vec<f32>| match precision {
+        Precision::Half => FlatSamples::F16(v.into_iter().map(f16::from_f32).collect()),
+        Precision::Float => FlatSamples::F32(v),
+    };
+    let mut channels = SmallVec::<[AnyChannel<FlatSamples>; 4]>::new();
+    for (name, c) in [("R", 0), ("G", 1), ("B", 2)] {
+        channels.push(AnyChannel::new(name, samples(plane(c))));
+    }
+    if let Some(depth) = &frame.depth {
+        channels.push(AnyChannel::new("Z", FlatSamples::F32(depth.clone())));
+    }
+    let mut attributes = LayerAttributes {
+        frames_per_second: Some(rational(meta.fps)),
+        ..LayerAttributes::default()
+    };
+    let other = &mut attributes.other;
+    other.insert(
+        Text::from(fingerprint::KEY),
+        AttributeValue::Text(Text::from(meta.fingerprint.as_str())),
+    );
+    other.insert(
+        Text::from("rayreel:frame"),
+        AttributeValue::I32(i32::try_from(meta.frame).unwrap_or(i32::MAX)),
+    );
+    other.insert(Text::from("rayreel:time"), AttributeValue::F64(meta.time));
+    let encoding = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let layer = Layer::new((w, h), attributes, encoding, AnyChannels::sort(channels));
+    let mut out = Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(&mut out)
+        .map_err(|e| e.to_string())?;
+    Ok(out.into_inner())
+}
+
+/// fps as a fraction, exact for whole and common NTSC-style rates.
+fn rational(fps: f64) -> (i32, u32) {
+    let den = if fps.fract() == 0.0 { 1 } else { 1000 };
+    ((fps * f64::from(den)).round() as i32, den)
+}
+
+/// Reads the whole file (EXR has no checksums, so decoding every block is the check).
+pub fn inspect(bytes: &[u8]) -> Existing {
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes));
+    match image {
+        Err(e) => Existing::Corrupt(format!("unreadable EXR: {e}")),
+        Ok(image) => match image
+            .layer_data
+            .attributes
+            .other
+            .get(&Text::from(fingerprint::KEY))
+        {
+            Some(AttributeValue::Text(t)) => Existing::Ours(t.to_string()),
+            _ => Existing::Foreign,
+        },
+    }
+}
