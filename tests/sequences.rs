@@ -130,11 +130,8 @@ fn a_single_key_is_a_still_camera() {
     render(&tmp, &["render", &seq, "-q"]);
     let got = files(&tmp.join("frames/still"));
     assert_eq!(got.len(), 3, "{got:?}");
-    let first = std::fs::read(tmp.join("frames/still/frame_0000.png")).unwrap();
-    assert_eq!(
-        first,
-        std::fs::read(tmp.join("frames/still/frame_0002.png")).unwrap()
-    );
+    let first = read_png(&tmp.join("frames/still/frame_0000.png"));
+    assert_eq!(first, read_png(&tmp.join("frames/still/frame_0002.png")));
 }
 
 #[test]
