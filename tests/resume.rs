@@ -1,0 +1,234 @@
+//! Resuming: atomic frames, fingerprints, incremental re-render, interruption. Every check
+//! compares against a clean, uninterrupted render byte for byte.
+
+mod common;
+use common::*;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+const SEQ: &str = "
+render: { width: 160, height: 90 }
+materials:
+  red:   { ambient: [0.1, 0, 0], diffuse: [0.7, 0, 0], specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
+  floor: { ambient: [0.1, 0.1, 0.1], diffuse: [0.6, 0.6, 0.6], specular: [1, 1, 1], reflection: 0.5 }
+objects:
+  - sphere: { center: [-0.2, 0, -1], radius: 0.7, material: red }
+  - sphere: { center: [0.3, -0.4, -0.2], radius: 0.2, material: red }
+  - plane:  { point: [0, -0.7, 0], normal: [0, 1, 0], material: floor }
+lights:
+  - point: { position: [5, 5, 5], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }
+timeline:
+  fps: 12
+  interpolation: linear
+  keyframes:
+    - { time: 0, position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }
+    - { time: 2, position: [1.5, 0.4, 0.5] }
+    - { time: 4, position: [0, 0.5, -2.5] }
+";
+
+fn setup(name: &str) -> std::path::PathBuf {
+    let tmp = scratch(name);
+    std::fs::write(tmp.join("seq.yaml"), SEQ).unwrap();
+    tmp
+}
+
+fn render(dir: &Path, args: &[&str]) -> String {
+    let mut all = vec!["render", "seq.yaml"];
+    all.extend(args);
+    let out = run_in(dir, &all);
+    assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+    stderr(&out)
+}
+
+fn assert_same_files(a: &Path, b: &Path) {
+    let (fa, fb) = (files(a), files(b));
+    assert_eq!(fa, fb);
+    for f in fa {
+        assert_eq!(
+            std::fs::read(a.join(&f)).unwrap(),
+            std::fs::read(b.join(&f)).unwrap(),
+            "{f}"
+        );
+    }
+}
+
+#[test]
+fn killed_at_any_moment_resumes_to_the_identical_sequence() {
+    let tmp = setup("kill");
+    render(&tmp, &["-o", "clean/f_####.png", "-q"]);
+    for (i, delay_ms) in [30u64, 60, 90, 120, 150, 200, 260, 330, 420, 520, 40, 75]
+        .iter()
+        .enumerate()
+    {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_rayreel"))
+            .args([
+                "render",
+                "seq.yaml",
+                "-o",
+                "out/f_####.png",
+                "-q",
+                "--threads",
+                if i % 2 == 0 { "2" } else { "1" },
+            ])
+            .current_dir(&tmp)
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(*delay_ms));
+        child.kill().unwrap(); // SIGKILL
+        child.wait().unwrap();
+        // Whatever survived with a final name is a complete frame.
+        for f in files(&tmp.join("out"))
+            .iter()
+            .filter(|f| !f.starts_with('.'))
+        {
+            let bytes = std::fs::read(tmp.join("out").join(f)).unwrap();
+            assert!(
+                matches!(
+                    rayreel::output::png::inspect(&bytes),
+                    rayreel::output::Existing::Ours(_)
+                ),
+                "{f}"
+            );
+        }
+    }
+    render(&tmp, &["-o", "out/f_####.png", "-q"]);
+    assert_same_files(&tmp.join("clean"), &tmp.join("out"));
+}
+
+#[test]
+fn damaged_files_are_rerendered_and_foreign_ones_kept() {
+    let tmp = setup("damaged");
+    render(&tmp, &["-o", "clean/f_####.png", "-q"]);
+    render(&tmp, &["-o", "out/f_####.png", "-q"]);
+    let out = tmp.join("out");
+    let full = std::fs::read(out.join("f_0003.png")).unwrap();
+    std::fs::write(out.join("f_0003.png"), &full[..full.len() / 2]).unwrap();
+    let mut garbled = std::fs::read(out.join("f_0005.png")).unwrap();
+    let mid = garbled.len() / 2;
+    garbled[mid..mid + 16].copy_from_slice(b"garbage garbage!");
+    std::fs::write(out.join("f_0005.png"), &garbled).unwrap();
+    std::fs::write(out.join("f_0006.png"), b"not a png at all").unwrap();
+    image::RgbImage::new(160, 90)
+        .save(out.join("f_0007.png"))
+        .unwrap();
+    let foreign = std::fs::read(out.join("f_0007.png")).unwrap();
+
+    let result = run_in(&tmp, &["render", "seq.yaml", "-o", "out/f_####.png"]);
+    let log = stderr(&result);
+    assert_eq!(result.status.code(), Some(1), "{log}");
+    assert!(
+        log.contains("48 frames: 44 up to date, 3 corrupt, 1 foreign → rendering 3"),
+        "{log}"
+    );
+    assert!(
+        log.contains("out/f_0007.png: not written by rayreel (no fingerprint); leaving it alone"),
+        "{log}"
+    );
+    assert!(log.contains("frames 7 were not written"), "{log}");
+    assert_eq!(std::fs::read(out.join("f_0007.png")).unwrap(), foreign);
+    for n in [3, 5, 6] {
+        let name = format!("f_{n:04}.png");
+        assert_eq!(
+            std::fs::read(out.join(&name)).unwrap(),
+            std::fs::read(tmp.join("clean").join(&name)).unwrap()
+        );
+    }
+    // --force overwrites the foreign file too; then everything matches the clean render.
+    render(&tmp, &["-o", "out/f_####.png", "--force", "-q"]);
+    assert_same_files(&tmp.join("clean"), &out);
+}
+
+#[test]
+fn editing_a_keyframe_rerenders_exactly_the_frames_it_moves() {
+    let tmp = setup("edit");
+    render(&tmp, &["-q"]);
+    let again = render(&tmp, &[]);
+    assert!(
+        again.contains("48 frames: 48 up to date → rendering 0"),
+        "{again}"
+    );
+    // Move the last key: with linear interpolation only frames 25-47 (t in (2, 4)) change;
+    // frame 24 sits exactly on the middle key.
+    let edited = SEQ.replace("position: [0, 0.5, -2.5]", "position: [0.2, 0.5, -2.5]");
+    std::fs::write(tmp.join("seq.yaml"), edited).unwrap();
+    let dry = run_in(&tmp, &["render", "seq.yaml", "--dry-run"]);
+    let plan = String::from_utf8_lossy(&dry.stdout);
+    assert!(
+        plan.contains("48 frames: 25 up to date, 23 stale → rendering 23"),
+        "{plan}"
+    );
+    assert!(plan.contains("would render: 25-47"), "{plan}");
+    let log = render(&tmp, &[]);
+    assert!(log.contains("frame 25/48 written"), "{log}");
+    assert!(
+        !log.contains("frame 24/48 written") && !log.contains("frame 3/48 written"),
+        "{log}"
+    );
+    // A different resolution re-renders everything.
+    let dry = run_in(
+        &tmp,
+        &["render", "seq.yaml", "--size", "80x45", "--dry-run"],
+    );
+    assert!(String::from_utf8_lossy(&dry.stdout).contains("48 frames: 48 stale → rendering 48"));
+}
+
+#[test]
+fn ctrl_c_stops_cleanly_with_exit_130_and_the_rerun_finishes() {
+    let tmp = setup("sigint");
+    render(&tmp, &["-o", "clean/f_####.png", "-q"]);
+    let child = Command::new(env!("CARGO_BIN_EXE_rayreel"))
+        .args([
+            "render",
+            "seq.yaml",
+            "-o",
+            "out/f_####.png",
+            "--threads",
+            "1",
+        ])
+        .current_dir(&tmp)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(150));
+    // SAFETY: sends SIGINT to our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let out = child.wait_with_output().unwrap();
+    let log = stderr(&out);
+    assert_eq!(out.status.code(), Some(130), "{log}");
+    assert!(
+        log.contains("interrupted:") && log.contains("run the same command again"),
+        "{log}"
+    );
+    let written = files(&tmp.join("out"));
+    assert!(
+        written.len() < 48,
+        "the interrupt came too late to test anything"
+    );
+    assert!(
+        written.iter().all(|f| !f.starts_with('.')),
+        "temporary files left: {written:?}"
+    );
+    render(&tmp, &["-o", "out/f_####.png", "-q"]);
+    assert_same_files(&tmp.join("clean"), &tmp.join("out"));
+}
+
+#[test]
+fn exr_frames_resume_too() {
+    let tmp = setup("exr");
+    render(
+        &tmp,
+        &["-o", "e/f_####.exr", "--depth", "-q", "--frames", "0-5"],
+    );
+    let log = render(&tmp, &["-o", "e/f_####.exr", "--depth", "--frames", "0-5"]);
+    assert!(
+        log.contains("6 frames: 6 up to date → rendering 0"),
+        "{log}"
+    );
+    let log = render(&tmp, &["-o", "e/f_####.exr", "--frames", "0-5"]);
+    assert!(
+        log.contains("6 frames: 6 stale → rendering 6"),
+        "without depth the files differ: {log}"
+    );
+}
