@@ -29,6 +29,10 @@ pub const MAX_COLOR: f64 = 1e6;
 pub const MAX_FRAMES: u64 = 10_000_000;
 /// A camera that rolls more than this between consecutive frames is flipping over.
 pub const MAX_ROLL_PER_FRAME_DEGREES: f64 = 60.0;
+/// Largest magnitude of any number: lengths get squared, and f64 squares overflow near 1e154.
+pub const MAX_MAGNITUDE: f64 = 1e100;
+/// Smallest sphere radius: its square must stay a normal f64.
+pub const MIN_RADIUS: f64 = 1e-100;
 /// Largest frames per second accepted.
 pub const MAX_FPS: f64 = 1000.0;
 
@@ -232,11 +236,29 @@ fn got(v: impl Display) -> String {
     format!("(got {v})")
 }
 
-fn number(path: &str, v: f64) -> Check<f64> {
-    if v.is_finite() {
-        Ok(v)
+/// `(got X)` for a number, in exponent form when plain digits would run long.
+fn got_num(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || (1e-4..1e16).contains(&a) || !v.is_finite() {
+        got(v)
     } else {
-        invalid(path, format!("must be a finite number {}", got(v)))
+        got(format!("{v:e}"))
+    }
+}
+
+fn number(path: &str, v: f64) -> Check<f64> {
+    if !v.is_finite() {
+        invalid(path, format!("must be a finite number {}", got_num(v)))
+    } else if v.abs() > MAX_MAGNITUDE {
+        invalid(
+            path,
+            format!(
+                "must be within ±{MAX_MAGNITUDE:e} (lengths are squared) {}",
+                got_num(v)
+            ),
+        )
+    } else {
+        Ok(v)
     }
 }
 
@@ -277,14 +299,14 @@ fn color(path: &str, v: raw::V3) -> Check<DVec3> {
 fn in_range(path: &str, v: f64, lo: f64, hi: f64, what: &str) -> Check<f64> {
     number(path, v)?;
     if v < lo || v > hi {
-        return invalid(path, format!("must be {what} {}", got(v)));
+        return invalid(path, format!("must be {what} {}", got_num(v)));
     }
     Ok(v)
 }
 
 fn positive(path: &str, v: f64) -> Check<f64> {
     if number(path, v)? <= 0.0 {
-        return invalid(path, format!("must be greater than 0 {}", got(v)));
+        return invalid(path, format!("must be greater than 0 {}", got_num(v)));
     }
     Ok(v)
 }
@@ -294,7 +316,7 @@ fn fov(path: &str, v: f64) -> Check<f64> {
     if !(v > 0.0 && v < 180.0) {
         return invalid(
             path,
-            format!("must be between 0 and 180 degrees, exclusive {}", got(v)),
+            format!("must be between 0 and 180 degrees, exclusive {}", got_num(v)),
         );
     }
     Ok(v)
@@ -390,7 +412,13 @@ fn object(
         Ok(Object {
             shape: Shape::Sphere {
                 center: vector(&format!("{p}.center"), s.center)?,
-                radius: positive(&format!("{p}.radius"), s.radius)?,
+                radius: in_range(
+                    &format!("{p}.radius"),
+                    s.radius,
+                    MIN_RADIUS,
+                    MAX_MAGNITUDE,
+                    "a positive length in [1e-100, 1e100]",
+                )?,
             },
             material: material_ref(&format!("{p}.material"), &s.material, names, materials)?,
         })
