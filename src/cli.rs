@@ -3,6 +3,7 @@
 use crate::output::exr::Precision;
 use crate::output::png::Compression;
 use crate::output::stream::StreamFormat;
+use crate::sequence::Quality;
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
@@ -51,6 +52,13 @@ pub struct RenderArgs {
     /// Surfaces one path may visit (1 = no reflections).
     #[arg(long, value_name = "N")]
     pub max_depth: Option<u64>,
+    /// Uniform samples per pixel (replaces render.samples and turns adaptive sampling off).
+    #[arg(long, value_name = "N")]
+    pub samples: Option<u64>,
+    /// Quality preset: draft (1 sample, depth 2, half size), preview (4 samples), final
+    /// (adaptive 4-64 samples, depth 5); explicit flags override it.
+    #[arg(long, value_enum)]
+    pub quality: Option<Quality>,
     /// Frames to render, e.g. 7, 0-23, 0-100:5, 1,3,10-12 (default: all).
     #[arg(long, value_name = "SPEC", value_parser = parse_frame_spec)]
     pub frames: Option<FrameSpec>,

@@ -25,6 +25,8 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         max_depth: args.max_depth,
         output: args.output.clone(),
         depth: args.depth,
+        samples: args.samples,
+        quality: args.quality,
     };
     let seq = sequence::load(&args.file, &overrides)?;
     let count = seq.timeline.frame_count;

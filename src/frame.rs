@@ -12,6 +12,8 @@ pub struct Frame {
     /// Colour values the tracer produced as NaN or beyond f32 and that were replaced before
     /// storing; the test suite asserts this stays 0 on every extreme scene.
     pub non_finite: u64,
+    /// Eye-ray samples traced for the colour (the cost measure of sampling strategies).
+    pub samples: u64,
 }
 
 impl Frame {
@@ -52,6 +54,7 @@ mod tests {
             rgb: vec![0.0, 0.5, 1.0, -3.0, 7.0, 0.2],
             depth: None,
             non_finite: 0,
+            samples: 2,
         };
         assert_eq!(f.to_rgb8(), vec![0, 128, 255, 0, 255, 51]);
         assert_eq!(f.to_rgb16()[1], 32768);

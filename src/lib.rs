@@ -6,6 +6,7 @@ pub mod cli;
 pub mod frame;
 pub mod output;
 pub mod plan;
+pub mod preview;
 pub mod progress;
 pub mod scene;
 pub mod schedule;

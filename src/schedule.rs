@@ -165,7 +165,7 @@ pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, String> {
 pub fn render_frame(seq: &Sequence, n: u64) -> Result<Frame, String> {
     let pose = seq.timeline.pose_of(n);
     let camera = Camera::new(&pose).map_err(|e| format!("frame {n}: {e}"))?;
-    Ok(tracer::render(&seq.scene, &camera, &seq.settings))
+    Ok(tracer::render(&seq.scene, &camera, &seq.settings, n))
 }
 
 /// A worker's whole job for one frame: render, then encode for each sink that wants it.

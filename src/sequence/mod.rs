@@ -12,8 +12,9 @@ use crate::camera::{Camera, Degenerate, Pose};
 use crate::output::pattern::Pattern;
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
 use crate::timeline::{Ease, Interpolation, Key, Orbit, Path as TimelinePath, Timeline};
-use crate::tracer::Settings;
+use crate::tracer::{Adaptive, Sampler, Settings};
 use glam::DVec3;
+pub use raw::Quality;
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
 
@@ -46,6 +47,8 @@ pub struct Sequence {
     pub settings: Settings,
     /// Output pattern; a run of `#` stands for the zero-padded frame number.
     pub output: String,
+    /// The file's `render.quality`, if any (draft also halves the resolution).
+    pub quality: Option<Quality>,
 }
 
 /// Values given on the command line; they replace the file's.
@@ -55,6 +58,8 @@ pub struct Overrides {
     pub max_depth: Option<u64>,
     pub output: Option<String>,
     pub depth: bool,
+    pub samples: Option<u64>,
+    pub quality: Option<Quality>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -144,6 +149,19 @@ fn yaml_error(file: &Path, e: &serde_yaml::Error) -> LoadError {
 
 fn apply(seq: &mut Sequence, o: &Overrides) -> Result<(), LoadError> {
     let flag = |flag, message: String| LoadError::Flag { flag, message };
+    if let Some(q) = o.quality {
+        preset(&mut seq.settings, q);
+    }
+    let draft = o.quality.or(seq.quality) == Some(Quality::Draft);
+    if draft && o.size.is_none() {
+        seq.settings.width = seq.settings.width.div_ceil(2);
+        seq.settings.height = seq.settings.height.div_ceil(2);
+    }
+    if let Some(n) = o.samples {
+        // `--samples N` means N uniform samples, whatever the file or preset chose.
+        seq.settings.samples = samples(n).map_err(|m| flag("--samples", m))?;
+        seq.settings.adaptive = None;
+    }
     if let Some((w, h)) = o.size {
         seq.settings.width = dimension(w).map_err(|m| flag("--size", format!("width {m}")))?;
         seq.settings.height = dimension(h).map_err(|m| flag("--size", format!("height {m}")))?;
@@ -218,18 +236,105 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<Sequence> {
             }
             None => format!("frames/{name}/frame_####.png"),
         },
+        quality: raw.render.quality,
         timeline,
     })
 }
 
 fn render_settings(r: &raw::Render) -> Check<Settings> {
     let check = |path: &str, r: Result<u32, String>| r.or_else(|m| invalid(path, m));
-    Ok(Settings {
+    let mut s = Settings {
         width: check("render.width", dimension(r.width.unwrap_or(1280)))?,
         height: check("render.height", dimension(r.height.unwrap_or(720)))?,
-        max_depth: check("render.max_depth", max_depth(r.max_depth.unwrap_or(3)))?,
+        max_depth: 3,
         depth: r.depth.unwrap_or(false),
-    })
+        samples: 1,
+        adaptive: None,
+        sampler: match r.sampler {
+            Some(raw::Sampler::Random) => Sampler::Random,
+            _ => Sampler::Stratified,
+        },
+    };
+    if let Some(q) = r.quality {
+        preset(&mut s, q);
+    }
+    if let Some(d) = r.max_depth {
+        s.max_depth = check("render.max_depth", max_depth(d))?;
+    }
+    if let Some(n) = r.samples {
+        s.samples = check("render.samples", samples(n))?;
+    }
+    if let Some(a) = &r.adaptive {
+        let threshold = a.threshold.unwrap_or(DEFAULT_THRESHOLD);
+        in_range(
+            "render.adaptive.threshold",
+            threshold,
+            0.0,
+            1.0,
+            "in (0, 1]",
+        )?;
+        if threshold == 0.0 {
+            return invalid(
+                "render.adaptive.threshold",
+                "must be greater than 0 (got 0)",
+            );
+        }
+        let max_samples = check(
+            "render.adaptive.max_samples",
+            samples(a.max_samples.unwrap_or(64)),
+        )?;
+        s.adaptive = Some(Adaptive {
+            threshold: threshold as f32,
+            max_samples,
+        });
+    }
+    if let Some(a) = s.adaptive
+        && a.max_samples <= s.samples
+    {
+        return invalid(
+            "render.adaptive.max_samples",
+            format!(
+                "must exceed render.samples ({}) {}",
+                s.samples,
+                got(a.max_samples)
+            ),
+        );
+    }
+    Ok(s)
+}
+
+/// Default `render.adaptive.threshold`: a linear colour difference of about 5/255.
+pub const DEFAULT_THRESHOLD: f64 = 0.02;
+/// Largest samples per pixel accepted.
+pub const MAX_SAMPLES: u64 = 4096;
+
+/// What a quality preset sets; explicit settings at the same or a later level override it.
+pub fn preset(s: &mut Settings, q: Quality) {
+    let (samples, adaptive, depth) = match q {
+        Quality::Draft => (1, None, 2),
+        Quality::Preview => (4, None, 3),
+        Quality::Final => (
+            4,
+            Some(Adaptive {
+                threshold: DEFAULT_THRESHOLD as f32,
+                max_samples: 64,
+            }),
+            5,
+        ),
+    };
+    s.samples = samples;
+    s.adaptive = adaptive;
+    s.max_depth = depth;
+}
+
+fn samples(v: u64) -> Result<u32, String> {
+    if (1..=MAX_SAMPLES).contains(&v) {
+        Ok(v as u32)
+    } else {
+        Err(format!(
+            "must be 1 to {MAX_SAMPLES} samples per pixel (got {v})"
+        ))
+    }
 }
 
 fn got(v: impl Display) -> String {
@@ -316,7 +421,10 @@ fn fov(path: &str, v: f64) -> Check<f64> {
     if !(v > 0.0 && v < 180.0) {
         return invalid(
             path,
-            format!("must be between 0 and 180 degrees, exclusive {}", got_num(v)),
+            format!(
+                "must be between 0 and 180 degrees, exclusive {}",
+                got_num(v)
+            ),
         );
     }
     Ok(v)

@@ -31,6 +31,35 @@ pub struct Render {
     pub max_depth: Option<u64>,
     pub background: Option<V3>,
     pub depth: Option<bool>,
+    pub samples: Option<u64>,
+    pub adaptive: Option<Adaptive>,
+    pub quality: Option<Quality>,
+    pub sampler: Option<Sampler>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Adaptive {
+    pub threshold: Option<f64>,
+    pub max_samples: Option<u64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Quality {
+    /// 1 sample, max_depth 2, half resolution: for looking at a path.
+    Draft,
+    /// 4 jittered samples, max_depth 3.
+    Preview,
+    /// Adaptive 4 to 64 samples, max_depth 5.
+    Final,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sampler {
+    Stratified,
+    Random,
 }
 
 #[derive(Debug, Deserialize)]

@@ -1,18 +1,21 @@
-//! The core tracer: `render(scene, camera, settings) → Frame`, one eye ray through each pixel
-//! centre, rows spread over the rayon pool. Every pixel depends only on the scene, the camera
-//! and its own coordinates, so a frame is byte-identical whatever the thread count.
+//! The core tracer: `render(scene, camera, settings, frame) → Frame`. Pixels are sampled at
+//! their centre (1 sample), on a jittered grid, or adaptively; rows spread over the rayon pool.
+//! Every pixel depends only on the scene, the camera, the frame number and its own coordinates,
+//! so a frame is byte-identical whatever the thread count or order of work.
 
 pub mod intersect;
+pub mod sample;
 pub mod shade;
 
 use crate::camera::{Camera, screen_point};
 use crate::frame::Frame;
 use crate::scene::Scene;
+use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// What decides a frame besides the scene and the camera.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
     pub width: u32,
     pub height: u32,
@@ -20,54 +23,186 @@ pub struct Settings {
     pub max_depth: u32,
     /// Also record the eye-ray distance to the first hit.
     pub depth: bool,
+    /// Eye rays per pixel (uniform sampling), or the first pass of adaptive sampling.
+    pub samples: u32,
+    pub adaptive: Option<Adaptive>,
+    pub sampler: Sampler,
 }
 
-pub fn render(scene: &Scene, camera: &Camera, settings: &Settings) -> Frame {
-    let (w, h) = (settings.width, settings.height);
-    let row_len = 3 * w as usize;
-    let mut rgb = vec![0f32; row_len * h as usize];
-    let mut depth = settings.depth.then(|| vec![0f32; (w * h) as usize]);
-    let non_finite = AtomicU64::new(0);
-    let trace_row = |row: u32, rgb_row: &mut [f32], mut depth_row: Option<&mut [f32]>| {
-        let mut bad = 0;
-        for col in 0..w {
-            let (x, y) = screen_point(row, col, 0.5, 0.5, w, h);
-            let eye = intersect::Ray {
-                origin: camera.origin,
-                dir: camera.direction(x, y),
-                leaving: None,
-            };
-            let sample = shade::trace(scene, eye, settings.max_depth);
-            let c = col as usize;
-            let color = sample.color.as_vec3().to_array();
-            bad += color.iter().filter(|v| !v.is_finite()).count() as u64;
-            rgb_row[3 * c..3 * c + 3].copy_from_slice(&finite(color));
-            if let Some(d) = depth_row.as_deref_mut() {
-                d[c] = sample.depth as f32;
-            }
-        }
-        if bad > 0 {
-            non_finite.fetch_add(bad, Ordering::Relaxed);
-        }
+/// Adaptive sampling: every pixel gets `samples`; pixels whose samples disagree, or whose
+/// neighbours differ, by more than `threshold` are rendered again with `max_samples`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Adaptive {
+    pub threshold: f32,
+    pub max_samples: u32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Sampler {
+    /// Jittered n×n grid, or R2 low-discrepancy for other counts.
+    Stratified,
+    /// Independent uniform positions, kept to measure what stratification buys.
+    Random,
+}
+
+pub fn render(scene: &Scene, camera: &Camera, settings: &Settings, frame: u64) -> Frame {
+    let tracer = PixelTracer {
+        scene,
+        camera,
+        settings,
+        frame,
     };
-    match depth.as_mut() {
-        Some(depth) => rgb
-            .par_chunks_mut(row_len)
-            .zip(depth.par_chunks_mut(w as usize))
-            .enumerate()
-            .for_each(|(row, (c, d))| trace_row(row as u32, c, Some(d))),
-        None => rgb
-            .par_chunks_mut(row_len)
-            .enumerate()
-            .for_each(|(row, c)| trace_row(row as u32, c, None)),
+    let (w, h) = (settings.width as usize, settings.height as usize);
+    let mut rgb = vec![0f32; 3 * w * h];
+    let mut spread = vec![
+        0f32;
+        if settings.adaptive.is_some() {
+            w * h
+        } else {
+            0
+        }
+    ];
+    let non_finite = AtomicU64::new(0);
+    let first = tracer.pass(
+        &mut rgb,
+        &mut spread,
+        settings.samples,
+        &|_| true,
+        &non_finite,
+    );
+    let mut samples = first;
+    if let Some(a) = settings.adaptive {
+        let marked = mark(&rgb, &spread, w, h, a.threshold);
+        samples += tracer.pass(
+            &mut rgb,
+            &mut [],
+            a.max_samples,
+            &|i| marked[i],
+            &non_finite,
+        );
+        samples -= u64::from(settings.samples) * marked.iter().filter(|m| **m).count() as u64;
     }
+    let depth = settings.depth.then(|| tracer.depth());
     Frame {
-        width: w,
-        height: h,
+        width: settings.width,
+        height: settings.height,
         rgb,
         depth,
         non_finite: non_finite.into_inner(),
+        samples,
     }
+}
+
+struct PixelTracer<'a> {
+    scene: &'a Scene,
+    camera: &'a Camera,
+    settings: &'a Settings,
+    frame: u64,
+}
+
+impl PixelTracer<'_> {
+    /// Renders the pixels `select` picks with `count` samples each, rows in parallel; fills
+    /// `spread` (when not empty) with each pixel's largest channel range. Returns the samples.
+    fn pass(
+        &self,
+        rgb: &mut [f32],
+        spread: &mut [f32],
+        count: u32,
+        select: &(dyn Fn(usize) -> bool + Sync),
+        non_finite: &AtomicU64,
+    ) -> u64 {
+        let w = self.settings.width as usize;
+        let traced = AtomicU64::new(0);
+        let mut spreads: Vec<Option<&mut [f32]>> = if spread.is_empty() {
+            (0..self.settings.height).map(|_| None).collect()
+        } else {
+            spread.chunks_mut(w).map(Some).collect()
+        };
+        rgb.par_chunks_mut(3 * w)
+            .zip(spreads.par_iter_mut())
+            .enumerate()
+            .for_each(|(row, (rgb_row, spread_row))| {
+                let (mut n, mut bad) = (0, 0);
+                for col in 0..w {
+                    if !select(row * w + col) {
+                        continue;
+                    }
+                    let (mean, range) = self.pixel(row as u32, col as u32, count);
+                    let mean = mean.as_vec3().to_array();
+                    bad += mean.iter().filter(|v| !v.is_finite()).count() as u64;
+                    rgb_row[3 * col..3 * col + 3].copy_from_slice(&finite(mean));
+                    if let Some(s) = spread_row.as_deref_mut() {
+                        s[col] = range;
+                    }
+                    n += u64::from(count);
+                }
+                traced.fetch_add(n, Ordering::Relaxed);
+                if bad > 0 {
+                    non_finite.fetch_add(bad, Ordering::Relaxed);
+                }
+            });
+        traced.into_inner()
+    }
+
+    /// Mean colour of `count` samples in one pixel, and the largest per-channel range.
+    #[inline]
+    fn pixel(&self, row: u32, col: u32, count: u32) -> (DVec3, f32) {
+        let s = self.settings;
+        let index = u64::from(row) * u64::from(s.width) + u64::from(col);
+        let (mut sum, mut lo, mut hi) = (DVec3::ZERO, DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for k in 0..count {
+            let (u, v) = match s.sampler {
+                Sampler::Stratified => sample::offset(self.frame, index, k, count),
+                Sampler::Random => sample::independent(self.frame, index, k),
+            };
+            let c = shade::trace(self.scene, self.eye(row, col, u, v), s.max_depth);
+            sum += c;
+            lo = lo.min(c);
+            hi = hi.max(c);
+        }
+        (sum / f64::from(count), (hi - lo).max_element() as f32)
+    }
+
+    #[inline]
+    fn eye(&self, row: u32, col: u32, u: f64, v: f64) -> intersect::Ray {
+        let (x, y) = screen_point(row, col, u, v, self.settings.width, self.settings.height);
+        intersect::Ray {
+            origin: self.camera.origin,
+            dir: self.camera.direction(x, y),
+            leaving: None,
+        }
+    }
+
+    /// Distance along each pixel's centre ray to the first hit (+inf for background).
+    fn depth(&self) -> Vec<f32> {
+        let w = self.settings.width as usize;
+        let mut depth = vec![0f32; w * self.settings.height as usize];
+        depth.par_chunks_mut(w).enumerate().for_each(|(row, d)| {
+            for (col, z) in d.iter_mut().enumerate() {
+                let ray = self.eye(row as u32, col as u32, 0.5, 0.5);
+                *z = intersect::nearest(&self.scene.objects, &ray)
+                    .map_or(f32::INFINITY, |h| h.t as f32);
+            }
+        });
+        depth
+    }
+}
+
+/// Pixels that need more samples: their own samples disagree, or a 4-neighbour differs.
+fn mark(rgb: &[f32], spread: &[f32], w: usize, h: usize, threshold: f32) -> Vec<bool> {
+    let differs =
+        |a: usize, b: usize| (0..3).any(|c| (rgb[3 * a + c] - rgb[3 * b + c]).abs() > threshold);
+    (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (row, col) = (i / w, i % w);
+            spread[i] > threshold
+                || (col > 0 && differs(i, i - 1))
+                || (col + 1 < w && differs(i, i + 1))
+                || (row > 0 && differs(i, i - w))
+                || (row + 1 < h && differs(i, i + w))
+        })
+        .collect()
 }
 
 /// The last guard before a pixel: a numerical surprise, or a colour beyond f32, never writes

@@ -8,26 +8,16 @@ use super::intersect::{Hit, Ray, nearest, normal_at, occluded};
 use crate::scene::{Intensity, Light, Material, Scene};
 use glam::DVec3;
 
-/// What one eye ray brings back: its colour and the distance to its first hit.
-pub struct Sample {
-    pub color: DVec3,
-    pub depth: f64,
-}
-
-/// Follows one eye ray through at most `max_depth` surfaces.
-pub fn trace(scene: &Scene, eye: Ray, max_depth: u32) -> Sample {
+/// Follows one eye ray through at most `max_depth` surfaces; returns its colour.
+pub fn trace(scene: &Scene, eye: Ray, max_depth: u32) -> DVec3 {
     let mut ray = eye;
     let mut color = DVec3::ZERO;
     let mut weight = DVec3::ONE;
-    let mut depth = f64::INFINITY;
-    for bounce in 0..max_depth {
+    for _ in 0..max_depth {
         let Some(hit) = nearest(&scene.objects, &ray) else {
             color += weight * scene.background;
             break;
         };
-        if bounce == 0 {
-            depth = hit.t;
-        }
         let (point, normal) = surface(scene, &ray, &hit);
         let material = &scene.materials[scene.objects[hit.object].material];
         color += weight * local(scene, material, point, normal, ray.dir, hit.object);
@@ -41,7 +31,7 @@ pub fn trace(scene: &Scene, eye: Ray, max_depth: u32) -> Sample {
             hit.object,
         );
     }
-    Sample { color, depth }
+    color
 }
 
 /// The one way secondary rays leave a surface: from the hit point itself, remembering the
