@@ -15,7 +15,9 @@ Examples:
   rayreel render sequences/orbit.yaml --output frames/orbit/frame_####.exr --depth
   rayreel render sequences/orbit.yaml --pipe raw --quiet | ffmpeg -f rawvideo -pix_fmt rgb24 -s 1280x720 -r 24 -i - -c:v libx264 -pix_fmt yuv420p orbit.mp4
   rayreel render sequences/orbit.yaml --dry-run
-  rayreel check sequences/flyby.yaml";
+  rayreel check sequences/flyby.yaml
+  rayreel measure sequences/orbit.yaml --frame 0
+  rayreel preview sequences/flyby.yaml --out /tmp/preview";
 
 #[derive(Debug, Parser)]
 #[command(name = "rayreel", version, about = "Render camera fly-through animations with a Whitted ray tracer", after_help = EXAMPLES)]
@@ -31,12 +33,50 @@ pub enum Command {
     Render(RenderArgs),
     /// Validate a sequence file and print a one-screen summary.
     Check(CheckArgs),
+    /// Draw the camera path (top and side views) and a contact sheet of draft frames.
+    Preview(PreviewArgs),
+    /// Measure what each speed/accuracy setting costs and buys on one frame.
+    Measure(MeasureArgs),
 }
 
 #[derive(Debug, Args)]
 pub struct CheckArgs {
     /// The sequence file (YAML).
     pub file: PathBuf,
+}
+
+#[derive(Debug, Args)]
+pub struct MeasureArgs {
+    /// The sequence file (YAML).
+    pub file: PathBuf,
+    /// The frame to measure.
+    #[arg(long, default_value_t = 0)]
+    pub frame: u64,
+    /// Measurement size (default: the sequence's aspect ratio at 320 pixels wide).
+    #[arg(long, value_parser = parse_size, value_name = "WxH")]
+    pub size: Option<(u64, u64)>,
+    /// Timed runs per setting; the median is reported, with min and max.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=100))]
+    pub runs: u64,
+    /// Directory for measure.csv, measure.json and measure.svg (default: frames/NAME/measure).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+pub struct PreviewArgs {
+    /// The sequence file (YAML).
+    pub file: PathBuf,
+    /// Directory for NAME_path.png and NAME_sheet.png (default: frames/NAME/preview).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Frames on the contact sheet, e.g. 0-100:10 (default: --tiles frames evenly spaced).
+    #[arg(long, value_name = "SPEC", value_parser = parse_frame_spec)]
+    pub frames: Option<FrameSpec>,
+    /// Number of evenly spaced frames on the contact sheet.
+    #[arg(long, value_name = "N", default_value_t = crate::preview::DEFAULT_TILES,
+          value_parser = clap::value_parser!(u64).range(1..=crate::preview::MAX_TILES))]
+    pub tiles: u64,
 }
 
 #[derive(Debug, Args)]

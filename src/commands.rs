@@ -1,7 +1,7 @@
 //! The subcommands: each turns validated arguments into calls down the pipeline.
 
 use crate::Error;
-use crate::cli::{CheckArgs, Cli, Command, RenderArgs};
+use crate::cli::{CheckArgs, Cli, Command, MeasureArgs, PreviewArgs, RenderArgs};
 use crate::output::{self, FileFormat, pattern::Pattern, stream::StreamFormat};
 use crate::plan::{self, Plan};
 use crate::progress::Progress;
@@ -16,6 +16,8 @@ pub fn run(cli: Cli) -> Result<(), Error> {
     match cli.command {
         Command::Render(args) => render(args),
         Command::Check(args) => check(args),
+        Command::Preview(args) => preview(args),
+        Command::Measure(args) => measure(args),
     }
 }
 
@@ -205,6 +207,45 @@ fn finish(outcome: Result<Outcome, String>, plan: Option<&Plan>) -> Result<(), E
     }
 }
 
+/// Writes DIR/NAME_path.png and DIR/NAME_sheet.png, printing their paths; warnings about the
+/// camera path go to stderr.
+fn preview(args: PreviewArgs) -> Result<(), Error> {
+    use crate::preview;
+    let seq = sequence::load(&args.file, &Overrides::default())?;
+    let count = seq.timeline.frame_count;
+    let frames = match &args.frames {
+        Some(spec) => spec
+            .frames(count)
+            .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
+        None => preview::evenly_spaced(count, args.tiles),
+    };
+    if frames.len() as u64 > preview::MAX_TILES {
+        return Err(Error::Usage(format!(
+            "--frames: {} frames; a contact sheet holds at most {}",
+            frames.len(),
+            preview::MAX_TILES
+        )));
+    }
+    let dir = args
+        .out
+        .unwrap_or_else(|| Path::new("frames").join(&seq.name).join("preview"));
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
+    let (plot, warnings) = preview::path_plot(&seq);
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    let plot_file = dir.join(format!("{}_path.png", seq.name));
+    preview::write_png(&plot_file, &plot).map_err(Error::Failed)?;
+    println!("{}", plot_file.display());
+    let (sheet, _) =
+        preview::contact_sheet(&seq, &frames, preview::TILE_WIDTH).map_err(Error::Failed)?;
+    let sheet_file = dir.join(format!("{}_sheet.png", seq.name));
+    preview::write_png(&sheet_file, &sheet).map_err(Error::Failed)?;
+    println!("{}", sheet_file.display());
+    Ok(())
+}
+
 fn check(args: CheckArgs) -> Result<(), Error> {
     let seq = sequence::load(&args.file, &Overrides::default())?;
     print!("{}", summary(&args.file.display().to_string(), &seq));
@@ -268,4 +309,60 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
         t.frame_count as f64 / t.fps,
         seq.output
     )
+}
+
+fn measure(args: MeasureArgs) -> Result<(), Error> {
+    let mut seq = sequence::load(&args.file, &Overrides::default())?;
+    let count = seq.timeline.frame_count;
+    if args.frame >= count {
+        return Err(Error::Usage(format!(
+            "--frame: frame {} is outside the timeline, which has frames 0-{}",
+            args.frame,
+            count - 1
+        )));
+    }
+    let (w, h) = match args.size {
+        Some(size) => size,
+        None => {
+            let s = &seq.settings;
+            (
+                320,
+                (320.0 * f64::from(s.height) / f64::from(s.width))
+                    .round()
+                    .max(1.0) as u64,
+            )
+        }
+    };
+    let o = Overrides {
+        size: Some((w, h)),
+        ..Overrides::default()
+    };
+    seq = sequence::load(&args.file, &o)?;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("frames").join(&seq.name).join("measure"));
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
+    eprintln!(
+        "measuring frame {} of {} at {w}x{h}",
+        args.frame,
+        args.file.display()
+    );
+    let report = crate::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
+        eprintln!("  {line}")
+    })
+    .map_err(Error::Failed)?;
+    print!("{}", report.table());
+    for (name, text) in [
+        ("measure.csv", report.csv()),
+        ("measure.json", report.json()),
+        ("measure.svg", report.svg()),
+    ] {
+        let path = dir.join(name);
+        output::atomic::write_atomic(&path, text.as_bytes())
+            .map_err(|e| Error::Failed(format!("{}: cannot write: {e}", path.display())))?;
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
 }

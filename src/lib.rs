@@ -4,6 +4,7 @@
 pub mod camera;
 pub mod cli;
 pub mod frame;
+pub mod measure;
 pub mod output;
 pub mod plan;
 pub mod preview;

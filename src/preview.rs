@@ -35,6 +35,7 @@ const AXIS: Rgb<u8> = Rgb([200, 200, 200]);
 const BORDER: Rgb<u8> = Rgb([150, 150, 150]);
 const INK: Rgb<u8> = Rgb([30, 30, 30]);
 const MUTED: Rgb<u8> = Rgb([120, 120, 120]);
+const LABEL: Rgb<u8> = Rgb([80, 80, 80]);
 const KEYFRAME: Rgb<u8> = Rgb([20, 20, 20]);
 const TARGET: Rgb<u8> = Rgb([240, 130, 0]);
 const TARGET_LINK: Rgb<u8> = Rgb([250, 200, 150]);
@@ -46,7 +47,7 @@ const LIGHT: Rgb<u8> = Rgb([255, 205, 0]);
 /// Default number of contact-sheet tiles.
 pub const DEFAULT_TILES: u64 = 12;
 /// Most tiles one sheet holds: beyond this the picture stops being a glance.
-pub const MAX_TILES: u64 = 1024;
+pub const MAX_TILES: u64 = 400;
 /// Default tile width in pixels; the height follows the sequence's aspect ratio.
 pub const TILE_WIDTH: u32 = 256;
 
@@ -75,19 +76,22 @@ pub fn evenly_spaced(frame_count: u64, n: u64) -> Vec<u64> {
     out
 }
 
-/// The sequence as the contact sheet renders it: the file's settings at `tile_w`×`tile_h`
-/// pixels and at most 2 surfaces per path, which keeps reflections visible but cheap.
+/// The sequence as the contact sheet renders it: the draft preset (1 sample, 2 surfaces per
+/// path, which keeps reflections visible but cheap) at `tile_w`×`tile_h` pixels.
 pub fn draft(seq: &Sequence, tile_w: u32, tile_h: u32) -> Sequence {
     let mut d = seq.clone();
+    crate::sequence::preset(&mut d.settings, crate::sequence::Quality::Draft);
     d.settings.width = tile_w;
     d.settings.height = tile_h;
-    d.settings.max_depth = d.settings.max_depth.min(2);
     d
 }
 
 /// The tile height for `tile_w` with the sequence's aspect ratio, rounded, at least 1.
 pub fn tile_height(seq: &Sequence, tile_w: u32) -> u32 {
-    let (w, h) = (f64::from(seq.settings.width), f64::from(seq.settings.height));
+    let (w, h) = (
+        f64::from(seq.settings.width),
+        f64::from(seq.settings.height),
+    );
     ((f64::from(tile_w) * h / w).round() as u32).max(1)
 }
 
@@ -138,13 +142,16 @@ impl SheetLayout {
     }
 }
 
+/// (frame, x, y): which frame a contact-sheet tile shows and its top-left pixel.
+pub type TileOrigin = (u64, u32, u32);
+
 /// Renders `frames` at draft quality, `tile_w` pixels wide, into one picture; returns it with
 /// each tile's (frame, x, y) origin.
 pub fn contact_sheet(
     seq: &Sequence,
     frames: &[u64],
     tile_w: u32,
-) -> Result<(RgbImage, Vec<(u64, u32, u32)>), String> {
+) -> Result<(RgbImage, Vec<TileOrigin>), String> {
     let count = seq.timeline.frame_count;
     if frames.is_empty() {
         return Err("no frames to put on the contact sheet".into());
@@ -159,7 +166,14 @@ pub fn contact_sheet(
     let small = draft(seq, tile_w, tile_h);
     let layout = SheetLayout::new(frames.len(), tile_w, tile_h);
     let mut img = RgbImage::from_pixel(layout.width, layout.height, SHEET_BACKGROUND);
-    sheet_header(&mut img, seq, frames.len(), tile_w, tile_h, small.settings.max_depth);
+    sheet_header(
+        &mut img,
+        seq,
+        frames.len(),
+        tile_w,
+        tile_h,
+        small.settings.max_depth,
+    );
     let mut origins = Vec::with_capacity(frames.len());
     for (k, &n) in frames.iter().enumerate() {
         let (x, y) = layout.origin(k);
@@ -254,16 +268,17 @@ impl Plot {
         let (bad, warnings) = problems(seq, &samples);
         let (keys, targets) = keys_and_targets(t);
         let huge = huge_spheres(seq, &samples);
-        let fit = fit(seq, &samples, &huge, &targets);
-        Plot {
+        let mut plot = Plot {
             samples,
             bad,
             warnings,
             keys,
             targets,
             huge,
-            fit,
-        }
+            fit: Bounds::EMPTY,
+        };
+        plot.fit = fit(seq, &plot);
+        plot
     }
 }
 
@@ -301,11 +316,17 @@ fn problems(seq: &Sequence, samples: &[(u64, Pose)]) -> (Vec<bool>, Vec<String>)
     for (i, o) in seq.scene.objects.iter().enumerate() {
         let (flags, what): (Vec<bool>, String) = match o.shape {
             Shape::Sphere { center, radius } => (
-                samples.iter().map(|(_, p)| p.position.distance(center) < radius).collect(),
+                samples
+                    .iter()
+                    .map(|(_, p)| p.position.distance(center) < radius)
+                    .collect(),
                 format!("the camera is inside objects[{i}] (sphere)"),
             ),
             Shape::Plane { point, normal } => (
-                samples.iter().map(|(_, p)| (p.position - point).dot(normal) < 0.0).collect(),
+                samples
+                    .iter()
+                    .map(|(_, p)| (p.position - point).dot(normal) < 0.0)
+                    .collect(),
                 format!("the camera is behind objects[{i}] (plane), against its normal"),
             ),
         };
@@ -349,7 +370,9 @@ fn report(
 /// The load-time roll check (`sequence::check_every_frame`) repeated on the samples, so a
 /// sequence built in code is flagged too.
 fn roll_flags(samples: &[(u64, Pose)]) -> Vec<bool> {
-    let limit = crate::sequence::MAX_ROLL_PER_FRAME_DEGREES.to_radians().cos();
+    let limit = crate::sequence::MAX_ROLL_PER_FRAME_DEGREES
+        .to_radians()
+        .cos();
     let mut previous: Option<DVec3> = None;
     let mut flags = Vec::with_capacity(samples.len());
     for (_, pose) in samples {
@@ -381,27 +404,28 @@ fn huge_spheres(seq: &Sequence, samples: &[(u64, Pose)]) -> Vec<bool> {
     seq.scene.objects.iter().map(huge).collect()
 }
 
-/// The box both panels show: the camera path and the ordinary spheres, plus look-at targets
-/// and lights that are not far outside them.
-fn fit(seq: &Sequence, samples: &[(u64, Pose)], huge: &[bool], targets: &[DVec3]) -> Bounds {
+/// The box both panels show: the camera path, the keyframes (the last may lie beyond the last
+/// frame) and the ordinary spheres, plus look-at targets and lights not far outside them.
+fn fit(seq: &Sequence, plot: &Plot) -> Bounds {
     let mut core = Bounds::EMPTY;
-    for (_, p) in samples {
-        core.add(p.position);
+    let keys = plot.keys.iter().map(|k| k.0);
+    for p in plot.samples.iter().map(|(_, p)| p.position).chain(keys) {
+        core.add(p);
     }
-    for (o, &huge) in seq.scene.objects.iter().zip(huge) {
+    for (o, &huge) in seq.scene.objects.iter().zip(&plot.huge) {
         if let (Shape::Sphere { center, radius }, false) = (o.shape, huge) {
             core.add(center - DVec3::splat(radius));
             core.add(center + DVec3::splat(radius));
         }
     }
     // A still camera with nothing around it still needs a size: its distance to the target.
-    let first = samples[0].1;
+    let first = plot.samples[0].1;
     let floor = first.position.distance(first.look_at).max(1e-300);
     let size = core.size().max_element().max(floor);
     let near = core.grown(EXTRA_REACH * size);
     let mut all = core;
     let lights = positioned_lights(seq).into_iter().map(|(_, p)| p);
-    for p in targets.iter().copied().chain(lights) {
+    for p in plot.targets.iter().copied().chain(lights) {
         if near.contains(p) {
             all.add(p);
         }
@@ -504,7 +528,7 @@ impl Panel {
     }
 
     /// The point on the slice plane under pixel position (x, y).
-    fn to_world(&self, x: f64, y: f64) -> DVec3 {
+    fn world_at(&self, x: f64, y: f64) -> DVec3 {
         let sign = if self.flipped { 1.0 } else { -1.0 };
         let a = (x - f64::from(self.x) - f64::from(self.width) / 2.0) / self.scale;
         let b = sign * (y - f64::from(self.y) - f64::from(self.height) / 2.0) / self.scale;
@@ -616,10 +640,13 @@ fn title(img: &mut RgbImage, seq: &Sequence) {
             interpolation,
         } => format!("{} keyframes, {interpolation:?}", keys.len()).to_lowercase(),
     };
+    let frames = match t.frame_count {
+        1 => "1 frame".to_string(),
+        n => format!("{n} frames"),
+    };
     let text = format!(
-        "{}: {} frames at {} fps ({:.2} s), {motion}",
+        "{}: {frames} at {} fps ({:.2} s), {motion}",
         seq.name,
-        t.frame_count,
         fmt_num(t.fps),
         t.frame_count as f64 / t.fps
     );
@@ -645,10 +672,11 @@ fn draw_panel(img: &mut RgbImage, p: &Panel, seq: &Sequence, plot: &Plot) {
     draw_target_links(&mut c, p, plot);
     draw_path(&mut c, p, plot);
     draw_ticks(&mut c, p, plot);
-    draw_keys(&mut c, p, plot);
     draw_targets(&mut c, p, plot);
-    draw_ends(&mut c, p, plot);
     draw_lights(&mut c, p, seq);
+    draw_ends(&mut c, p, plot);
+    // Last, so labels of far-off targets and lights never hide a keyframe.
+    draw_keys(&mut c, p, plot);
     draw_gizmo(&mut c, p);
     c.frame_rect(p.rect(), BORDER);
 }
@@ -660,12 +688,18 @@ fn draw_solids(c: &mut Canvas, p: &Panel, seq: &Sequence, plot: &Plot) {
         let material = &seq.scene.materials[o.material];
         let (fill, edge) = (tint(material, 0.22), shade(material));
         match o.shape {
-            Shape::Plane { point, normal } => {
-                c.mask(p.rect(), |x, y| (p.to_world(x, y) - point).dot(normal) < 0.0, fill, edge)
-            }
-            Shape::Sphere { center, radius } if huge => {
-                c.mask(p.rect(), |x, y| p.to_world(x, y).distance(center) < radius, fill, edge)
-            }
+            Shape::Plane { point, normal } => c.mask(
+                p.rect(),
+                |x, y| (p.world_at(x, y) - point).dot(normal) < 0.0,
+                fill,
+                edge,
+            ),
+            Shape::Sphere { center, radius } if huge => c.mask(
+                p.rect(),
+                |x, y| p.world_at(x, y).distance(center) < radius,
+                fill,
+                edge,
+            ),
             Shape::Sphere { .. } => {}
         }
     }
@@ -716,13 +750,17 @@ fn draw_spheres(c: &mut Canvas, p: &Panel, seq: &Sequence, plot: &Plot) {
         let inside = |x: f64, y: f64| (x - cx).hypot(y - cy) < r;
         c.mask(bbox, inside, tint(material, 0.45), shade(material));
         let label = format!("[{i}]");
-        let lw = text_width(&label, 1) as f64;
-        let (lx, ly) = if r >= 14.0 {
-            (cx - lw / 2.0, cy - 3.0)
+        // Inside the disc when it fits (large, else small type), otherwise just right of it.
+        let fits = |scale: i64| 2.0 * r > (text_width(&label, scale) + 6) as f64;
+        let scale = if fits(2) { 2 } else { 1 };
+        let lw = text_width(&label, scale) as f64;
+        let lx = if fits(scale) {
+            cx - lw / 2.0
         } else {
-            (cx + r + 3.0, cy - 3.0)
+            cx + r + 4.0
         };
-        c.text(lx.round() as i64, ly.round() as i64, &label, 1, MUTED);
+        let ly = cy - 3.5 * scale as f64;
+        c.text(lx.round() as i64, ly.round() as i64, &label, scale, LABEL);
     }
 }
 
@@ -739,7 +777,11 @@ fn draw_target_links(c: &mut Canvas, p: &Panel, plot: &Plot) {
 }
 
 fn draw_path(c: &mut Canvas, p: &Panel, plot: &Plot) {
-    let pts: Vec<(f64, f64)> = plot.samples.iter().map(|(_, s)| p.to_px(s.position)).collect();
+    let pts: Vec<(f64, f64)> = plot
+        .samples
+        .iter()
+        .map(|(_, s)| p.to_px(s.position))
+        .collect();
     for i in 1..pts.len() {
         let bad = plot.bad[i - 1] || plot.bad[i];
         let (w, colour) = if bad { (4.0, BAD) } else { (2.0, PATH) };
@@ -770,7 +812,9 @@ fn draw_ticks(c: &mut Canvas, p: &Panel, plot: &Plot) {
     const LENGTH: f64 = 30.0;
     for k in evenly_spaced(plot.samples.len() as u64, TICKS) {
         let pose = plot.samples[k as usize].1;
-        let Ok(cam) = Camera::new(&pose) else { continue };
+        let Ok(cam) = Camera::new(&pose) else {
+            continue;
+        };
         let from = p.to_px(pose.position);
         let ahead = p.to_px(pose.position + cam.forward / p.scale);
         let d = (ahead.0 - from.0, ahead.1 - from.1);
@@ -785,9 +829,10 @@ fn draw_ticks(c: &mut Canvas, p: &Panel, plot: &Plot) {
 fn draw_keys(c: &mut Canvas, p: &Panel, plot: &Plot) {
     for (i, &(k, _)) in plot.keys.iter().enumerate() {
         let at = p.to_px(k);
-        c.square_outline(at, 5.0, 2.0, KEYFRAME);
+        c.square_outline(at, 8.0, 2.0, KEYFRAME);
         let label = i.to_string();
-        c.text((at.0 + 8.0) as i64, (at.1 - 20.0) as i64, &label, 2, KEYFRAME);
+        let (x, y) = ((at.0 + 10.0) as i64, (at.1 - 22.0) as i64);
+        c.text(x, y, &label, 2, KEYFRAME);
     }
 }
 
@@ -819,7 +864,13 @@ fn draw_lights(c: &mut Canvas, p: &Panel, seq: &Sequence) {
         match edge_point(p, at) {
             None => {
                 c.diamond(at, 8.0, LIGHT, INK);
-                c.text((at.0 + 10.0) as i64, (at.1 - 4.0) as i64, &format!("L{i}"), 1, INK);
+                c.text(
+                    (at.0 + 10.0) as i64,
+                    (at.1 - 4.0) as i64,
+                    &format!("L{i}"),
+                    1,
+                    INK,
+                );
             }
             Some(edge) => {
                 c.diamond(edge, 8.0, PANEL, INK);
@@ -836,9 +887,12 @@ fn edge_point(p: &Panel, at: (f64, f64)) -> Option<(f64, f64)> {
     const INSET: f64 = 12.0;
     let (cx, cy) = p.centre_px();
     let (dx, dy) = (at.0 - cx, at.1 - cy);
-    let (hw, hh) = (f64::from(p.width) / 2.0 - INSET, f64::from(p.height) / 2.0 - INSET);
+    let (hw, hh) = (
+        f64::from(p.width) / 2.0 - INSET,
+        f64::from(p.height) / 2.0 - INSET,
+    );
     let t = (hw / dx.abs()).min(hh / dy.abs());
-    if !(t < 1.0) {
+    if t.is_nan() || t >= 1.0 {
         return None;
     }
     Some((cx + t * dx, cy + t * dy))
@@ -857,7 +911,13 @@ fn draw_gizmo(c: &mut Canvas, p: &Panel) {
     };
     c.arrow((ox, oy), (ox + 34.0, oy), 1.0, MUTED);
     c.arrow((ox, oy), (ox, oy + dy * 34.0), 1.0, MUTED);
-    c.text((ox + 38.0) as i64, (oy - 3.0) as i64, NAMES[p.across], 1, MUTED);
+    c.text(
+        (ox + 38.0) as i64,
+        (oy - 3.0) as i64,
+        NAMES[p.across],
+        1,
+        MUTED,
+    );
     let ty = if dy > 0.0 { oy + 38.0 } else { oy - 45.0 };
     c.text((ox - 2.0) as i64, ty as i64, NAMES[p.down], 1, MUTED);
 }
@@ -912,7 +972,7 @@ impl Marker {
                 c.line((x - 12.0, y), (x + 12.0, y), w, colour);
                 c.disc((x, y), 2.5, colour);
             }
-            Marker::Key => c.square_outline((x, y), 5.0, 2.0, KEYFRAME),
+            Marker::Key => c.square_outline((x, y), 8.0, 2.0, KEYFRAME),
             Marker::Start => c.disc((x, y), 5.5, START),
             Marker::End => c.square((x, y), 6.0, END),
             Marker::Target => c.cross((x, y), 6.0, 2.0, TARGET),
@@ -920,7 +980,12 @@ impl Marker {
             Marker::Light => c.diamond((x, y), 8.0, LIGHT, INK),
             Marker::Object => {
                 let grey = Rgb([200, 200, 200]);
-                c.mask(Rect::around((x, y), 9.0), |a, b| (a - x).hypot(b - y) < 7.0, grey, MUTED)
+                c.mask(
+                    Rect::around((x, y), 9.0),
+                    |a, b| (a - x).hypot(b - y) < 7.0,
+                    grey,
+                    MUTED,
+                )
             }
         }
     }
@@ -934,7 +999,10 @@ fn warning_lines(img: &mut RgbImage, warnings: &[String], y: u32) {
         y += i64::from(WARNING_ROW);
     }
     if warnings.len() > MAX_WARNING_LINES {
-        let more = format!("... and {} more warnings (on stderr)", warnings.len() - MAX_WARNING_LINES);
+        let more = format!(
+            "... and {} more warnings (on stderr)",
+            warnings.len() - MAX_WARNING_LINES
+        );
         c.text(i64::from(MARGIN), y, &more, 2, BAD);
     }
 }
@@ -950,11 +1018,16 @@ fn shade(m: &Material) -> Rgb<u8> {
     to_rgb(hue(m) * 0.6)
 }
 
-/// The diffuse colour scaled so its brightest channel is 1 (grey for black materials).
+/// The diffuse colour brightened towards full strength as far as it is saturated: a dark red
+/// reads as red, a grey stays grey instead of turning white.
 fn hue(m: &Material) -> DVec3 {
-    let d = m.diffuse.max(DVec3::ZERO);
+    let d = m.diffuse.clamp(DVec3::ZERO, DVec3::ONE);
     let top = d.max_element();
-    if top > 1e-6 { d / top } else { DVec3::splat(0.6) }
+    if top < 1e-6 {
+        return DVec3::ZERO;
+    }
+    let saturation = (top - d.min_element()) / top;
+    d + (d / top) * (1.0 - top) * saturation
 }
 
 fn to_rgb(c: DVec3) -> Rgb<u8> {
@@ -1097,8 +1170,15 @@ impl<'a> Canvas<'a> {
     fn line(&mut self, a: (f64, f64), b: (f64, f64), w: f64, c: Rgb<u8>) {
         let r = &self.clip;
         let pad = w + 1.0;
-        let bounds = (r.x0 as f64 - pad, r.y0 as f64 - pad, r.x1 as f64 + pad, r.y1 as f64 + pad);
-        let Some((a, b)) = clip_segment(a, b, bounds) else { return };
+        let bounds = (
+            r.x0 as f64 - pad,
+            r.y0 as f64 - pad,
+            r.x1 as f64 + pad,
+            r.y1 as f64 + pad,
+        );
+        let Some((a, b)) = clip_segment(a, b, bounds) else {
+            return;
+        };
         let steps = (b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil().max(1.0) as i64;
         for i in 0..=steps {
             let t = i as f64 / steps as f64;
@@ -1133,7 +1213,10 @@ impl<'a> Canvas<'a> {
         let head = 6.0;
         for side in [-1.0, 1.0] {
             let (px, py) = (-uy * side, ux * side);
-            let tip = (b.0 - head * ux + 0.6 * head * px, b.1 - head * uy + 0.6 * head * py);
+            let tip = (
+                b.0 - head * ux + 0.6 * head * px,
+                b.1 - head * uy + 0.6 * head * py,
+            );
             self.line(b, tip, w, c);
         }
     }
@@ -1173,7 +1256,13 @@ impl<'a> Canvas<'a> {
 
     /// Fills the pixels of `bbox` whose centre is `inside`, outlining the boundary. The clip
     /// edge is not a boundary: a shape cut off by the panel border gets no outline there.
-    fn mask(&mut self, bbox: Rect, inside: impl Fn(f64, f64) -> bool, fill: Rgb<u8>, edge: Rgb<u8>) {
+    fn mask(
+        &mut self,
+        bbox: Rect,
+        inside: impl Fn(f64, f64) -> bool,
+        fill: Rgb<u8>,
+        edge: Rgb<u8>,
+    ) {
         let r = Rect::new(bbox.x0 - 1, bbox.y0 - 1, bbox.x1 + 1, bbox.y1 + 1).intersect(&self.clip);
         if r.x0 >= r.x1 || r.y0 >= r.y1 {
             return;
@@ -1223,15 +1312,18 @@ impl<'a> Canvas<'a> {
     fn text_near(&mut self, p: &Panel, at: (f64, f64), s: &str, c: Rgb<u8>) {
         let r = p.rect();
         let w = text_width(s, 1);
-        let (cx, cy) = p.centre_px();
-        let below = at.1 < cy;
-        let y = if below { at.1 + 10.0 } else { at.1 - 18.0 } as i64;
-        let x = ((at.0 - w as f64 / 2.0) as i64).clamp(r.x0 + 4, (r.x1 - 4 - w).max(r.x0 + 4));
-        let x = if (at.0 - cx).abs() > f64::from(p.width) / 2.0 - 20.0 && at.0 > cx {
-            (r.x1 - 4 - w).max(r.x0 + 4)
+        let y = if at.1 < p.centre_px().1 {
+            at.1 + 10.0
         } else {
-            x
-        };
+            at.1 - 18.0
+        } as i64;
+        let x = ((at.0 - w as f64 / 2.0) as i64).clamp(r.x0 + 4, (r.x1 - 4 - w).max(r.x0 + 4));
+        // A backing box keeps the label readable over the grid and the path.
+        for yy in y - 2..y + 9 {
+            for xx in x - 2..x + w + 1 {
+                self.put(xx, yy, PANEL);
+            }
+        }
         self.text(x, y, s, 1, c);
     }
 }
@@ -1244,7 +1336,12 @@ fn clip_segment(
 ) -> Option<((f64, f64), (f64, f64))> {
     let (dx, dy) = (b.0 - a.0, b.1 - a.1);
     let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for (p, q) in [(-dx, a.0 - x0), (dx, x1 - a.0), (-dy, a.1 - y0), (dy, y1 - a.1)] {
+    for (p, q) in [
+        (-dx, a.0 - x0),
+        (dx, x1 - a.0),
+        (-dy, a.1 - y0),
+        (dy, y1 - a.1),
+    ] {
         if p == 0.0 {
             if q < 0.0 {
                 return None;
@@ -1258,7 +1355,7 @@ fn clip_segment(
             t1 = t1.min(t);
         }
     }
-    if !(t0 <= t1) {
+    if t0.is_nan() || t0 > t1 {
         return None;
     }
     let at = |t: f64| (a.0 + t * dx, a.1 + t * dy);
@@ -1402,7 +1499,10 @@ mod tests {
     #[test]
     fn segments_clip_to_the_box() {
         let b = (0.0, 0.0, 10.0, 10.0);
-        assert_eq!(clip_segment((-5.0, 5.0), (15.0, 5.0), b), Some(((0.0, 5.0), (10.0, 5.0))));
+        assert_eq!(
+            clip_segment((-5.0, 5.0), (15.0, 5.0), b),
+            Some(((0.0, 5.0), (10.0, 5.0)))
+        );
         assert_eq!(clip_segment((-5.0, -5.0), (-1.0, 20.0), b), None);
     }
 

@@ -281,7 +281,7 @@ fn render_settings(r: &raw::Render) -> Check<Settings> {
         }
         let max_samples = check(
             "render.adaptive.max_samples",
-            samples(a.max_samples.unwrap_or(64)),
+            samples(a.max_samples.unwrap_or(DEFAULT_MAX_SAMPLES)),
         )?;
         s.adaptive = Some(Adaptive {
             threshold: threshold as f32,
@@ -303,8 +303,10 @@ fn render_settings(r: &raw::Render) -> Check<Settings> {
     Ok(s)
 }
 
-/// Default `render.adaptive.threshold`: a linear colour difference of about 5/255.
-pub const DEFAULT_THRESHOLD: f64 = 0.02;
+/// Default `render.adaptive.threshold`: a linear colour difference of about 8/255.
+pub const DEFAULT_THRESHOLD: f64 = 0.03;
+/// Default `render.adaptive.max_samples`.
+pub const DEFAULT_MAX_SAMPLES: u64 = 32;
 /// Largest samples per pixel accepted.
 pub const MAX_SAMPLES: u64 = 4096;
 

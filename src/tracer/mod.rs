@@ -63,24 +63,15 @@ pub fn render(scene: &Scene, camera: &Camera, settings: &Settings, frame: u64) -
         }
     ];
     let non_finite = AtomicU64::new(0);
-    let first = tracer.pass(
-        &mut rgb,
-        &mut spread,
-        settings.samples,
-        &|_| true,
-        &non_finite,
-    );
-    let mut samples = first;
+    let all = Samples::All(settings.samples);
+    let mut samples = tracer.pass(&mut rgb, &mut spread, all, &|_| true, &non_finite);
     if let Some(a) = settings.adaptive {
         let marked = mark(&rgb, &spread, w, h, a.threshold);
-        samples += tracer.pass(
-            &mut rgb,
-            &mut [],
-            a.max_samples,
-            &|i| marked[i],
-            &non_finite,
-        );
-        samples -= u64::from(settings.samples) * marked.iter().filter(|m| **m).count() as u64;
+        let more = Samples::More {
+            have: settings.samples,
+            total: a.max_samples,
+        };
+        samples += tracer.pass(&mut rgb, &mut [], more, &|i| marked[i], &non_finite);
     }
     let depth = settings.depth.then(|| tracer.depth());
     Frame {
@@ -93,6 +84,16 @@ pub fn render(scene: &Scene, camera: &Camera, settings: &Settings, frame: u64) -
     }
 }
 
+/// Which samples a pass traces for each selected pixel.
+#[derive(Clone, Copy)]
+enum Samples {
+    /// `n` samples from scratch, in the settings' pattern.
+    All(u32),
+    /// Extends a pixel that has `have` samples to `total` with R2 samples `have..total`,
+    /// which are uniform over the pixel like the first ones, so the mean stays unbiased.
+    More { have: u32, total: u32 },
+}
+
 struct PixelTracer<'a> {
     scene: &'a Scene,
     camera: &'a Camera,
@@ -101,13 +102,13 @@ struct PixelTracer<'a> {
 }
 
 impl PixelTracer<'_> {
-    /// Renders the pixels `select` picks with `count` samples each, rows in parallel; fills
-    /// `spread` (when not empty) with each pixel's largest channel range. Returns the samples.
+    /// Renders the pixels `select` picks, rows in parallel; fills `spread` (when not empty)
+    /// with each pixel's largest channel range. Returns the number of samples traced.
     fn pass(
         &self,
         rgb: &mut [f32],
         spread: &mut [f32],
-        count: u32,
+        samples: Samples,
         select: &(dyn Fn(usize) -> bool + Sync),
         non_finite: &AtomicU64,
     ) -> u64 {
@@ -123,14 +124,19 @@ impl PixelTracer<'_> {
             .enumerate()
             .for_each(|(row, (rgb_row, spread_row))| {
                 let (mut n, mut bad) = (0, 0);
-                for col in 0..w {
-                    if !select(row * w + col) {
-                        continue;
-                    }
-                    let (mean, range) = self.pixel(row as u32, col as u32, count);
+                for col in (0..w).filter(|col| select(row * w + col)) {
+                    let px = &mut rgb_row[3 * col..3 * col + 3];
+                    let (sum, range, count) = self.pixel(row as u32, col as u32, samples);
+                    let mean = match samples {
+                        Samples::All(n) => sum / f64::from(n),
+                        Samples::More { have, total } => {
+                            (glam::Vec3::from_slice(px).as_dvec3() * f64::from(have) + sum)
+                                / f64::from(total)
+                        }
+                    };
                     let mean = mean.as_vec3().to_array();
                     bad += mean.iter().filter(|v| !v.is_finite()).count() as u64;
-                    rgb_row[3 * col..3 * col + 3].copy_from_slice(&finite(mean));
+                    px.copy_from_slice(&finite(mean));
                     if let Some(s) = spread_row.as_deref_mut() {
                         s[col] = range;
                     }
@@ -144,23 +150,28 @@ impl PixelTracer<'_> {
         traced.into_inner()
     }
 
-    /// Mean colour of `count` samples in one pixel, and the largest per-channel range.
+    /// Sum of the pixel's samples, their largest per-channel range, and how many there were.
     #[inline]
-    fn pixel(&self, row: u32, col: u32, count: u32) -> (DVec3, f32) {
+    fn pixel(&self, row: u32, col: u32, samples: Samples) -> (DVec3, f32, u32) {
         let s = self.settings;
         let index = u64::from(row) * u64::from(s.width) + u64::from(col);
+        let (first, end) = match samples {
+            Samples::All(n) => (0, n),
+            Samples::More { have, total } => (have, total),
+        };
         let (mut sum, mut lo, mut hi) = (DVec3::ZERO, DVec3::INFINITY, DVec3::NEG_INFINITY);
-        for k in 0..count {
-            let (u, v) = match s.sampler {
-                Sampler::Stratified => sample::offset(self.frame, index, k, count),
-                Sampler::Random => sample::independent(self.frame, index, k),
+        for k in first..end {
+            let (u, v) = match (samples, s.sampler) {
+                (Samples::More { .. }, _) => sample::r2(self.frame, index, k),
+                (Samples::All(n), Sampler::Stratified) => sample::offset(self.frame, index, k, n),
+                (Samples::All(_), Sampler::Random) => sample::independent(self.frame, index, k),
             };
             let c = shade::trace(self.scene, self.eye(row, col, u, v), s.max_depth);
             sum += c;
             lo = lo.min(c);
             hi = hi.max(c);
         }
-        (sum / f64::from(count), (hi - lo).max_element() as f32)
+        (sum, (hi - lo).max_element() as f32, end - first)
     }
 
     #[inline]
@@ -188,19 +199,22 @@ impl PixelTracer<'_> {
     }
 }
 
-/// Pixels that need more samples: their own samples disagree, or a 4-neighbour differs.
+/// Pixels that need more samples: their own samples disagree, or they stand out from their
+/// neighbours along a row or column (a second difference, so smooth shading gradients, which
+/// antialiasing cannot improve, are left alone while edges and thin features are caught).
 fn mark(rgb: &[f32], spread: &[f32], w: usize, h: usize, threshold: f32) -> Vec<bool> {
-    let differs =
-        |a: usize, b: usize| (0..3).any(|c| (rgb[3 * a + c] - rgb[3 * b + c]).abs() > threshold);
+    let bumps = |a: usize, i: usize, b: usize| {
+        (0..3).any(|c| {
+            (2.0 * rgb[3 * i + c] - rgb[3 * a + c] - rgb[3 * b + c]).abs() > 2.0 * threshold
+        })
+    };
     (0..w * h)
         .into_par_iter()
         .map(|i| {
             let (row, col) = (i / w, i % w);
             spread[i] > threshold
-                || (col > 0 && differs(i, i - 1))
-                || (col + 1 < w && differs(i, i + 1))
-                || (row > 0 && differs(i, i - w))
-                || (row + 1 < h && differs(i, i + w))
+                || (col > 0 && col + 1 < w && bumps(i - 1, i, i + 1))
+                || (row > 0 && row + 1 < h && bumps(i - w, i, i + w))
         })
         .collect()
 }

@@ -15,7 +15,13 @@ pub fn offset(frame: u64, pixel: u64, k: u32, count: u32) -> (f64, f64) {
         let (cx, cy) = (f64::from(k % n), f64::from(k / n));
         return ((cx + jx) / f64::from(n), (cy + jy) / f64::from(n));
     }
-    // R2 (Roberts 2018): the 2-D golden-ratio sequence, shifted per pixel.
+    r2(frame, pixel, k)
+}
+
+/// Sample `k` of the R2 sequence (Roberts 2018, the 2-D golden-ratio sequence) shifted per
+/// pixel: every prefix is well spread, so adaptive sampling can extend a pixel's samples.
+#[inline]
+pub fn r2(frame: u64, pixel: u64, k: u32) -> (f64, f64) {
     const A1: f64 = 0.754_877_666_246_692_7;
     const A2: f64 = 0.569_840_290_998_053_2;
     let (sx, sy) = random2(frame, pixel, u32::MAX);

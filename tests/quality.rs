@@ -1,0 +1,267 @@
+//! Speed versus accuracy: stratified sampling converges faster than random on edges, adaptive
+//! sampling matches uniform 16 spp with fewer than half the samples, presets are ordered, and
+//! `measure` writes parsable results.
+
+mod common;
+use common::*;
+use rayreel::measure::{self, compare};
+use rayreel::sequence::{self, Overrides, Quality};
+use rayreel::tracer::{Adaptive, Sampler, Settings};
+
+fn orbit(size: (u64, u64)) -> rayreel::sequence::Sequence {
+    let o = Overrides {
+        size: Some(size),
+        ..Overrides::default()
+    };
+    sequence::load(&repo().join("sequences/orbit.yaml"), &o).unwrap()
+}
+
+fn floats(seq: &rayreel::sequence::Sequence, s: &Settings) -> (Vec<f32>, u64) {
+    let f = measure::render(seq, 0, s).unwrap();
+    (f.rgb, f.samples)
+}
+
+fn rmse(a: &[f32], b: &[f32], pixels: &[usize]) -> f64 {
+    let sum: f64 = pixels
+        .iter()
+        .flat_map(|&p| (0..3).map(move |c| 3 * p + c))
+        .map(|i| {
+            let d = f64::from(a[i].clamp(0.0, 1.0) - b[i].clamp(0.0, 1.0));
+            d * d
+        })
+        .sum();
+    (sum / (3 * pixels.len()) as f64).sqrt()
+}
+
+/// Least-squares slope of log(y) against log(x).
+fn slope(xs: &[f64], ys: &[f64]) -> f64 {
+    let (lx, ly): (Vec<f64>, Vec<f64>) = (
+        xs.iter().map(|x| x.ln()).collect(),
+        ys.iter().map(|y| y.ln()).collect(),
+    );
+    let n = lx.len() as f64;
+    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
+    let cov: f64 = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let var: f64 = lx.iter().map(|x| (x - mx) * (x - mx)).sum();
+    cov / var
+}
+
+#[test]
+fn jittered_sampling_converges_faster_than_random_on_edges() {
+    let seq = orbit((128, 72));
+    let base = seq.settings;
+    let reference = Settings {
+        samples: 1024,
+        ..base
+    };
+    let (truth, _) = floats(&seq, &reference);
+    let (one, _) = floats(&seq, &Settings { samples: 1, ..base });
+    // Edge pixels: where one centred sample is visibly wrong.
+    let edges: Vec<usize> = (0..truth.len() / 3)
+        .filter(|&p| (0..3).any(|c| (one[3 * p + c] - truth[3 * p + c]).abs() > 0.05))
+        .collect();
+    assert!(edges.len() > 100, "too few edge pixels ({})", edges.len());
+    let counts = [1.0, 4.0, 16.0, 64.0];
+    let mut slopes = Vec::new();
+    for sampler in [Sampler::Stratified, Sampler::Random] {
+        let errors: Vec<f64> = counts
+            .iter()
+            .map(|&n| {
+                rmse(
+                    &floats(
+                        &seq,
+                        &Settings {
+                            samples: n as u32,
+                            sampler,
+                            ..base
+                        },
+                    )
+                    .0,
+                    &truth,
+                    &edges,
+                )
+            })
+            .collect();
+        eprintln!("{sampler:?}: edge RMSE {errors:?}");
+        assert!(
+            errors.windows(2).all(|w| w[1] < w[0]),
+            "{sampler:?} error must fall: {errors:?}"
+        );
+        slopes.push(slope(&counts, &errors));
+    }
+    eprintln!(
+        "slopes: stratified {:.3}, random {:.3}",
+        slopes[0], slopes[1]
+    );
+    assert!(slopes[0] <= -0.7, "stratified slope {}", slopes[0]);
+    assert!(
+        (-0.65..=-0.35).contains(&slopes[1]),
+        "random slope {}",
+        slopes[1]
+    );
+}
+
+#[test]
+fn adaptive_matches_uniform_16_with_less_than_half_the_samples() {
+    let seq = orbit((320, 180));
+    let base = seq.settings;
+    let all: Vec<usize> = (0..(320 * 180) as usize).collect();
+    let (truth, _) = floats(
+        &seq,
+        &Settings {
+            samples: 1024,
+            ..base
+        },
+    );
+    let (uniform, uniform_samples) = floats(
+        &seq,
+        &Settings {
+            samples: 16,
+            ..base
+        },
+    );
+    let adaptive = Settings {
+        samples: 4,
+        adaptive: Some(Adaptive {
+            threshold: sequence::DEFAULT_THRESHOLD as f32,
+            max_samples: sequence::DEFAULT_MAX_SAMPLES as u32,
+        }),
+        ..base
+    };
+    let (adapt, adaptive_samples) = floats(&seq, &adaptive);
+    let (eu, ea) = (rmse(&uniform, &truth, &all), rmse(&adapt, &truth, &all));
+    eprintln!(
+        "uniform 16: rmse {eu:.5}, {uniform_samples} samples; adaptive: rmse {ea:.5}, {adaptive_samples} samples"
+    );
+    assert!(ea <= eu, "adaptive error {ea} exceeds uniform 16's {eu}");
+    assert!(
+        adaptive_samples * 2 < uniform_samples,
+        "{adaptive_samples} samples is not under half of {uniform_samples}"
+    );
+}
+
+#[test]
+fn presets_trade_cost_for_accuracy_in_order() {
+    let seq = orbit((160, 90));
+    let truth = measure::render(&seq, 0, &measure::reference_settings(&seq.settings))
+        .unwrap()
+        .to_rgb8();
+    let mut last: Option<(u64, f64)> = None;
+    for q in [Quality::Draft, Quality::Preview, Quality::Final] {
+        let o = Overrides {
+            size: Some((160, 90)),
+            quality: Some(q),
+            ..Overrides::default()
+        };
+        let mut seq = sequence::load(&repo().join("sequences/orbit.yaml"), &o).unwrap();
+        if q == Quality::Draft {
+            // Draft halves the resolution unless a size is given; measure it at half size.
+            seq.settings.width = 80;
+            seq.settings.height = 45;
+        }
+        let frame = measure::render(&seq, 0, &seq.settings).unwrap();
+        let cost = frame.samples * u64::from(seq.settings.max_depth);
+        let image = if q == Quality::Draft {
+            upscale(&frame.to_rgb8(), 80, 160, 90)
+        } else {
+            frame.to_rgb8()
+        };
+        let error = compare(&image, &truth).rmse;
+        eprintln!("{q:?}: cost {cost}, rmse {error:.3}");
+        if let Some((c, e)) = last {
+            assert!(
+                cost > c && error < e,
+                "{q:?} must cost more and err less than the preset before"
+            );
+        }
+        last = Some((cost, error));
+    }
+}
+
+fn upscale(rgb: &[u8], hw: u32, w: u32, h: u32) -> Vec<u8> {
+    let mut out = Vec::new();
+    for r in 0..h {
+        for c in 0..w {
+            let i = 3 * ((r / 2) * hw + c / 2) as usize;
+            out.extend_from_slice(&rgb[i..i + 3]);
+        }
+    }
+    out
+}
+
+#[test]
+fn draft_halves_the_size_unless_a_size_is_given() {
+    let file = repo().join("sequences/orbit.yaml");
+    let draft = Overrides {
+        quality: Some(Quality::Draft),
+        ..Overrides::default()
+    };
+    let s = sequence::load(&file, &draft).unwrap().settings;
+    assert_eq!(
+        (s.width, s.height, s.samples, s.max_depth),
+        (640, 360, 1, 2)
+    );
+    let sized = Overrides {
+        size: Some((100, 50)),
+        max_depth: Some(4),
+        ..draft
+    };
+    let s = sequence::load(&file, &sized).unwrap().settings;
+    assert_eq!((s.width, s.height, s.max_depth), (100, 50, 4));
+    let fin = Overrides {
+        quality: Some(Quality::Final),
+        samples: Some(9),
+        ..Overrides::default()
+    };
+    let s = sequence::load(&file, &fin).unwrap().settings;
+    assert_eq!((s.samples, s.adaptive, s.max_depth), (9, None, 5));
+}
+
+#[test]
+fn measure_writes_csv_json_and_a_plot() {
+    let tmp = scratch("measure");
+    let out = run_in(
+        &tmp,
+        &[
+            "measure",
+            repo().join("sequences/orbit.yaml").to_str().unwrap(),
+            "--size",
+            "32x18",
+            "--runs",
+            "1",
+            "--out",
+            "m",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        table.contains("256 spp") && table.contains("final"),
+        "{table}"
+    );
+    let csv = std::fs::read_to_string(tmp.join("m/measure.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    let columns = lines[0].split(',').count();
+    assert_eq!(columns, 12);
+    assert_eq!(
+        lines.len(),
+        1 + measure::ladder(&orbit((32, 18)).settings).len()
+    );
+    for line in &lines[1..] {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells.len(), columns, "{line}");
+        assert!(
+            cells[2..].iter().all(|c| c.parse::<f64>().is_ok()),
+            "{line}"
+        );
+    }
+    let json: serde_yaml::Value =
+        serde_yaml::from_str(&std::fs::read_to_string(tmp.join("m/measure.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["rows"].as_sequence().unwrap().len(), lines.len() - 1);
+    assert!(json["reference"]["samples_per_pixel"].as_u64() == Some(1024));
+    let svg = std::fs::read_to_string(tmp.join("m/measure.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert_eq!(svg.matches("<text").count(), svg.matches("</text>").count());
+    assert!(svg.contains(">final</text>") && svg.contains("<polyline"));
+}
