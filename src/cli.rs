@@ -15,6 +15,8 @@ Examples:
   rayreel render sequences/orbit.yaml --output frames/orbit/frame_####.exr --depth
   rayreel render sequences/orbit.yaml --pipe raw --quiet | ffmpeg -f rawvideo -pix_fmt rgb24 -s 1280x720 -r 24 -i - -c:v libx264 -pix_fmt yuv420p orbit.mp4
   rayreel render sequences/orbit.yaml --dry-run
+  rayreel render sequences/orbit.yaml --shard 2/4
+  rayreel status sequences/orbit.yaml
   rayreel check sequences/flyby.yaml
   rayreel measure sequences/orbit.yaml --frame 0
   rayreel preview sequences/flyby.yaml --out /tmp/preview";
@@ -33,10 +35,19 @@ pub enum Command {
     Render(RenderArgs),
     /// Validate a sequence file and print a one-screen summary.
     Check(CheckArgs),
+    /// Report which frames of an output directory are up to date, stale, missing, corrupt or
+    /// foreign; exit 0 only when every selected frame is up to date. Takes render's options.
+    Status(StatusArgs),
     /// Draw the camera path (top and side views) and a contact sheet of draft frames.
     Preview(PreviewArgs),
     /// Measure what each speed/accuracy setting costs and buys on one frame.
     Measure(MeasureArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct StatusArgs {
+    #[command(flatten)]
+    pub job: JobArgs,
 }
 
 #[derive(Debug, Args)]
@@ -79,8 +90,10 @@ pub struct PreviewArgs {
     pub tiles: u64,
 }
 
+/// What decides a run's frames and files: shared by `render` and `status`, so a farm's final
+/// check repeats the render command line with `status` in place of `render`.
 #[derive(Debug, Args)]
-pub struct RenderArgs {
+pub struct JobArgs {
     /// The sequence file (YAML).
     pub file: PathBuf,
     /// Image size, e.g. 640x360 (overrides render.width/height).
@@ -99,22 +112,16 @@ pub struct RenderArgs {
     /// (adaptive 4-64 samples, depth 5); explicit flags override it.
     #[arg(long, value_enum)]
     pub quality: Option<Quality>,
-    /// Frames to render, e.g. 7, 0-23, 0-100:5, 1,3,10-12 (default: all).
+    /// Frames, e.g. 7, 0-23, 0-100:5, 1-100x2, 1,3,10-12 (default: all).
     #[arg(long, value_name = "SPEC", value_parser = parse_frame_spec)]
     pub frames: Option<FrameSpec>,
-    /// Worker threads (default: all cores).
-    #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
-    pub threads: Option<u16>,
-    /// No progress bar and no per-frame lines.
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Stream frames to stdout (raw rgb24/rgb48le or PNGs) for ffmpeg; files are then only
-    /// written when --output is given too.
-    #[arg(long, value_name = "FORMAT")]
-    pub pipe: Option<StreamFormat>,
-    /// Print (on stderr) the ffmpeg command that reads the --pipe stream.
-    #[arg(long)]
-    pub print_ffmpeg: bool,
+    /// This task's share of the frames: K/N (K from 1 to N, interleaved), or `auto` to read
+    /// SLURM_ARRAY_TASK_ID/MIN/COUNT or JOB_COMPLETION_INDEX with --shard-count.
+    #[arg(long, value_name = "K/N|auto", value_parser = parse_shard)]
+    pub shard: Option<ShardSpec>,
+    /// Number of shards for `--shard auto` under Kubernetes Indexed Jobs.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub shard_count: Option<u64>,
     /// Bits per channel of PNG files and streams.
     #[arg(long, value_name = "BITS", default_value = "8", value_parser = ["8", "16"])]
     pub bit_depth: String,
@@ -127,6 +134,28 @@ pub struct RenderArgs {
     /// Add a Z channel (eye-ray distance) to EXR files (same as render.depth: true).
     #[arg(long)]
     pub depth: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub job: JobArgs,
+    /// Worker threads (default: all cores).
+    #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Option<u16>,
+    /// No progress bar and no per-frame lines.
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// Progress format on stderr: a bar or lines (`human`), or one JSON object per frame.
+    #[arg(long, value_enum, default_value_t = ProgressFormat::Human)]
+    pub progress: ProgressFormat,
+    /// Stream frames to stdout (raw rgb24/rgb48le or PNGs) for ffmpeg; files are then only
+    /// written when --output is given too.
+    #[arg(long, value_name = "FORMAT")]
+    pub pipe: Option<StreamFormat>,
+    /// Print (on stderr) the ffmpeg command that reads the --pipe stream.
+    #[arg(long)]
+    pub print_ffmpeg: bool,
     /// Print which frames are up to date, stale, missing, corrupt or foreign, and render nothing.
     #[arg(long)]
     pub dry_run: bool,
@@ -134,6 +163,84 @@ pub struct RenderArgs {
     /// not write.
     #[arg(long)]
     pub force: bool,
+    /// Share the frames with other rayreel processes on the same directory through claim
+    /// files; a claim whose owner died or went silent is taken over.
+    #[arg(long)]
+    pub claim: bool,
+    /// Seconds without a heartbeat after which another host's claim is taken over.
+    #[arg(long, value_name = "SECONDS", default_value_t = 120, value_parser = clap::value_parser!(u64).range(2..))]
+    pub claim_timeout: u64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ProgressFormat {
+    Human,
+    Json,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShardSpec {
+    /// 1-based task number and task count.
+    Fixed(u64, u64),
+    Auto,
+}
+
+pub fn parse_shard(s: &str) -> Result<ShardSpec, String> {
+    if s == "auto" {
+        return Ok(ShardSpec::Auto);
+    }
+    let bad = || format!("expected K/N with 1 ≤ K ≤ N, such as 2/4, or `auto` (got `{s}`)");
+    let (k, n) = s.split_once('/').ok_or_else(bad)?;
+    let (k, n): (u64, u64) = (
+        k.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if k == 0 || n == 0 || k > n {
+        return Err(bad());
+    }
+    Ok(ShardSpec::Fixed(k, n))
+}
+
+/// Turns `--shard auto` into K/N from the scheduler's environment.
+pub fn resolve_shard(
+    spec: ShardSpec,
+    shard_count: Option<u64>,
+    env: &dyn Fn(&str) -> Option<String>,
+) -> Result<(u64, u64), String> {
+    if let ShardSpec::Fixed(k, n) = spec {
+        return Ok((k, n));
+    }
+    let num = |name: &str| -> Result<Option<u64>, String> {
+        env(name)
+            .map(|v| {
+                v.trim()
+                    .parse::<u64>()
+                    .map_err(|_| format!("{name}={v} is not a whole number"))
+            })
+            .transpose()
+    };
+    if let Some(id) = num("SLURM_ARRAY_TASK_ID")? {
+        let min = num("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
+        let count = num("SLURM_ARRAY_TASK_COUNT")?
+            .ok_or("SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not")?;
+        if id < min || id - min >= count {
+            return Err(format!(
+                "SLURM_ARRAY_TASK_ID={id} is outside MIN={min}, COUNT={count} (use a contiguous array such as --array=0-3)"
+            ));
+        }
+        return Ok((id - min + 1, count));
+    }
+    if let Some(index) = num("JOB_COMPLETION_INDEX")? {
+        let count = shard_count
+            .ok_or("JOB_COMPLETION_INDEX is set: give --shard-count N (the job's completions)")?;
+        if index >= count {
+            return Err(format!(
+                "JOB_COMPLETION_INDEX={index} is not below --shard-count {count}"
+            ));
+        }
+        return Ok((index + 1, count));
+    }
+    Err("--shard auto needs SLURM_ARRAY_TASK_ID (a Slurm job array) or JOB_COMPLETION_INDEX with --shard-count (a Kubernetes Indexed Job); neither is set".into())
 }
 
 /// `WxH` with both parts positive integers.
@@ -251,6 +358,33 @@ mod tests {
         );
         // A huge range is refused before anything is expanded.
         assert!(frames("0-18446744073709551615", 48).is_err());
+    }
+
+    #[test]
+    fn shards_parse_and_resolve() {
+        assert_eq!(parse_shard("2/4"), Ok(ShardSpec::Fixed(2, 4)));
+        for bad in ["0/4", "5/4", "2", "a/b", "1/0"] {
+            assert!(parse_shard(bad).is_err(), "{bad}");
+        }
+        let slurm = |name: &str| match name {
+            "SLURM_ARRAY_TASK_ID" => Some("7".to_string()),
+            "SLURM_ARRAY_TASK_MIN" => Some("5".to_string()),
+            "SLURM_ARRAY_TASK_COUNT" => Some("4".to_string()),
+            _ => None,
+        };
+        assert_eq!(resolve_shard(ShardSpec::Auto, None, &slurm), Ok((3, 4)));
+        let k8s = |name: &str| (name == "JOB_COMPLETION_INDEX").then(|| "0".to_string());
+        assert_eq!(resolve_shard(ShardSpec::Auto, Some(3), &k8s), Ok((1, 3)));
+        assert!(
+            resolve_shard(ShardSpec::Auto, None, &k8s)
+                .unwrap_err()
+                .contains("--shard-count")
+        );
+        assert!(
+            resolve_shard(ShardSpec::Auto, None, &|_| None)
+                .unwrap_err()
+                .contains("neither is set")
+        );
     }
 
     #[test]

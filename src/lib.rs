@@ -2,6 +2,7 @@
 //! buffer → sinks. `run` is the whole program behind the command line.
 
 pub mod camera;
+pub mod claim;
 pub mod cli;
 pub mod frame;
 pub mod measure;
@@ -31,6 +32,9 @@ pub enum Error {
     /// Rendering or writing failed (exit 1).
     #[error("{0}")]
     Failed(String),
+    /// `status` found frames that are not up to date (exit 1).
+    #[error("{0}")]
+    Incomplete(String),
     /// Ctrl-C or SIGTERM (exit 130).
     #[error("{0}")]
     Interrupted(String),
@@ -40,7 +44,7 @@ impl Error {
     pub fn exit_code(&self) -> u8 {
         match self {
             Error::Load(_) | Error::Usage(_) => 2,
-            Error::Failed(_) => 1,
+            Error::Failed(_) | Error::Incomplete(_) => 1,
             Error::Interrupted(_) => 130,
         }
     }

@@ -73,6 +73,16 @@ impl Plan {
 
     /// `48 frames: 30 up to date, 2 stale, 16 missing → rendering 18`.
     pub fn summary(&self) -> String {
+        format!(
+            "{} → rendering {}{}",
+            self.status_line(),
+            self.to_render().len(),
+            if self.force { " (--force)" } else { "" }
+        )
+    }
+
+    /// `48 frames: 30 up to date, 2 stale, 16 missing`.
+    pub fn status_line(&self) -> String {
         let parts: Vec<String> = [
             ("up to date", self.count(|s| *s == State::UpToDate)),
             ("stale", self.count(|s| *s == State::Stale)),
@@ -85,14 +95,25 @@ impl Plan {
         .map(|(what, n)| format!("{n} {what}"))
         .collect();
         let n = self.frames.len();
-        format!(
-            "{n} frame{}: {} → rendering {}{}",
-            if n == 1 { "" } else { "s" },
-            parts.join(", "),
-            self.to_render().len(),
-            if self.force { " (--force)" } else { "" }
-        )
+        let parts = if parts.is_empty() {
+            "none selected".to_string()
+        } else {
+            parts.join(", ")
+        };
+        format!("{n} frame{}: {parts}", if n == 1 { "" } else { "s" })
     }
+}
+
+/// Task `k` of `n` (1-based) takes every n-th frame starting at its own: shares differ by at
+/// most one frame, and each task sweeps the whole timeline, so close-ups and wide shots (which
+/// cluster in time and cost differently) spread evenly over the tasks.
+pub fn shard(frames: &[u64], k: u64, n: u64) -> Vec<u64> {
+    frames
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i as u64 % n == k - 1)
+        .map(|(_, f)| *f)
+        .collect()
 }
 
 /// Frame numbers as a compact spec: `0-11,14,20-47`.
@@ -117,6 +138,22 @@ pub fn compress(frames: &[u64]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shards_are_disjoint_cover_everything_and_balance() {
+        for count in [0u64, 1, 2, 7, 48, 101, 1000] {
+            let frames: Vec<u64> = (0..count).map(|f| f * 3 + 1).collect();
+            for n in 1..=9 {
+                let shares: Vec<Vec<u64>> = (1..=n).map(|k| shard(&frames, k, n)).collect();
+                let mut all: Vec<u64> = shares.concat();
+                all.sort_unstable();
+                assert_eq!(all, frames, "{count} frames over {n}");
+                let sizes: Vec<usize> = shares.iter().map(Vec::len).collect();
+                let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+                assert!(hi - lo <= 1, "{sizes:?}");
+            }
+        }
+    }
 
     #[test]
     fn compresses_runs() {

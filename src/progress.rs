@@ -1,5 +1,6 @@
 //! Progress on stderr: an indicatif bar on a terminal, one plain line per finished frame
-//! otherwise (so farm wrappers can follow), nothing with `--quiet`. stdout is never touched.
+//! otherwise (so farm wrappers can follow), one JSON object per frame event with
+//! `--progress json`, nothing with `--quiet`. stdout is never touched.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -18,6 +19,7 @@ pub struct Progress {
 enum Mode {
     Quiet,
     Lines,
+    Json,
     Bar(ProgressBar),
 }
 
@@ -26,16 +28,7 @@ impl Progress {
         let mode = if quiet {
             Mode::Quiet
         } else if std::io::stderr().is_terminal() {
-            let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
-            bar.set_style(
-                ProgressStyle::with_template(
-                    "{bar:40.cyan/blue} {pos}/{len} frames  {per_sec:.1}  eta {eta}  {msg}",
-                )
-                .expect("static template")
-                .progress_chars("##-"),
-            );
-            bar.enable_steady_tick(Duration::from_millis(200));
-            Mode::Bar(bar)
+            Mode::Bar(bar(total))
         } else {
             Mode::Lines
         };
@@ -48,11 +41,28 @@ impl Progress {
         }
     }
 
-    /// A line for the user that is not about one frame (plans, warnings).
+    /// One JSON object per line on stderr, for render farms.
+    pub fn json(total: u64, sequence_frames: u64) -> Progress {
+        Progress {
+            mode: Mode::Json,
+            ..Progress::new(total, sequence_frames, true)
+        }
+    }
+
+    /// Frames a new pass of work will render (claim mode re-plans).
+    pub fn add_total(&mut self, more: u64) {
+        self.total += more;
+        if let Mode::Bar(bar) = &self.mode {
+            bar.set_length(self.total);
+        }
+    }
+
+    /// A line for the user that is not about one frame (plans).
     pub fn note(&self, text: &str) {
         match &self.mode {
             Mode::Quiet => {}
             Mode::Lines => eprintln!("{text}"),
+            Mode::Json => eprintln!("{{\"event\": \"note\", \"text\": {}}}", quote(text)),
             Mode::Bar(bar) => bar.println(text),
         }
     }
@@ -61,7 +71,18 @@ impl Progress {
     pub fn warn(&self, text: &str) {
         match &self.mode {
             Mode::Bar(bar) => bar.println(text),
+            Mode::Json => eprintln!("{{\"event\": \"warning\", \"text\": {}}}", quote(text)),
             _ => eprintln!("{text}"),
+        }
+    }
+
+    /// A frame that needs no work (`up-to-date`) or may not be touched (`foreign`).
+    pub fn frame_skipped(&self, n: u64, path: &str, status: &str) {
+        if let Mode::Json = self.mode {
+            eprintln!(
+                "{{\"event\": \"frame\", \"frame\": {n}, \"path\": {}, \"status\": \"{status}\", \"seconds\": 0}}",
+                quote(path)
+            );
         }
     }
 
@@ -73,6 +94,10 @@ impl Progress {
                 "frame {n}/{} written {destination} ({seconds:.2} s, {} of {} done)",
                 self.sequence_frames, self.done, self.total
             ),
+            Mode::Json => eprintln!(
+                "{{\"event\": \"frame\", \"frame\": {n}, \"path\": {}, \"status\": \"written\", \"seconds\": {seconds:.4}}}",
+                quote(destination)
+            ),
             Mode::Bar(bar) => {
                 bar.set_message(destination.to_string());
                 bar.inc(1);
@@ -80,21 +105,36 @@ impl Progress {
         }
     }
 
+    pub fn frame_failed(&self, n: u64, error: &str) {
+        if let Mode::Json = self.mode {
+            eprintln!(
+                "{{\"event\": \"frame\", \"frame\": {n}, \"status\": \"failed\", \"error\": {}}}",
+                quote(error)
+            );
+        }
+    }
+
     /// Clears the bar and prints the closing summary line.
     pub fn finish(&self) {
         let wall = self.start.elapsed().as_secs_f64();
-        if let Mode::Bar(bar) = &self.mode {
-            bar.finish_and_clear();
+        let rate = if wall > 0.0 {
+            self.done as f64 / wall
+        } else {
+            0.0
+        };
+        match &self.mode {
+            Mode::Quiet => return,
+            Mode::Json => {
+                eprintln!(
+                    "{{\"event\": \"summary\", \"frames\": {}, \"seconds\": {wall:.3}, \"frames_per_second\": {rate:.3}}}",
+                    self.done
+                );
+                return;
+            }
+            Mode::Bar(bar) => bar.finish_and_clear(),
+            Mode::Lines => {}
         }
-        if matches!(self.mode, Mode::Quiet) || self.total == 0 {
-            return;
-        }
-        {
-            let rate = if wall > 0.0 {
-                self.done as f64 / wall
-            } else {
-                0.0
-            };
+        if self.total > 0 {
             eprintln!(
                 "rendered {} frame{} in {wall:.2} s ({rate:.2} frames/s)",
                 self.done,
@@ -102,4 +142,34 @@ impl Progress {
             );
         }
     }
+}
+
+fn bar(total: u64) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:40.cyan/blue} {pos}/{len} frames  {per_sec:.1}  eta {eta}  {msg}",
+        )
+        .expect("static template")
+        .progress_chars("##-"),
+    );
+    bar.enable_steady_tick(Duration::from_millis(200));
+    bar
+}
+
+/// A JSON string literal.
+pub fn quote(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
 }

@@ -5,6 +5,7 @@
 //! does all I/O: atomic file writes as frames finish, the stream strictly in frame order.
 
 use crate::camera::Camera;
+use crate::claim::{Attempt, Claims};
 use crate::frame::Frame;
 use crate::output::{
     self, FileFormat, FrameMeta, fingerprint, pattern::Pattern, stream::StreamFormat,
@@ -16,7 +17,7 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, mpsc};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// Where frame files go and in which format.
 #[derive(Clone)]
@@ -40,20 +41,19 @@ pub struct Job {
     pub files: Option<Files>,
     pub stream: Option<(StreamFormat, bool)>,
     pub threads: usize,
+    /// Cooperate with other processes through claim files (files only, no stream).
+    pub claims: Option<Arc<Claims>>,
 }
 
 /// How a run ended when nothing failed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Outcome {
-    Complete,
+    /// Every task done, except `held`: frames another live process has claimed.
+    Complete { written: usize, held: Vec<u64> },
     /// Ctrl-C or SIGTERM: frames in flight were finished, nothing new was started.
-    Interrupted {
-        written: usize,
-    },
+    Interrupted { written: usize },
     /// The stream's reader closed the pipe; the remaining work was cancelled.
-    ReaderClosed {
-        streamed: usize,
-    },
+    ReaderClosed { streamed: usize },
 }
 
 /// Frames rendered in parallel beyond one per thread: enough to hide encoding and writing
@@ -61,10 +61,21 @@ pub enum Outcome {
 const EXTRA_IN_FLIGHT: usize = 2;
 
 struct Done {
-    frame: u64,
     seconds: f64,
     file: Option<Vec<u8>>,
     stream: Option<Vec<u8>>,
+}
+
+/// The I/O side of a run: everything this thread does with finished frames.
+struct Delivery<'a> {
+    job: &'a Job,
+    progress: &'a mut Progress,
+    stream: Option<Reorder>,
+    written: usize,
+    held: Vec<u64>,
+    /// Frames in flight under a claim, with when they were last refreshed.
+    claimed: Vec<(u64, Instant)>,
+    stop: Option<Result<Outcome, String>>,
 }
 
 pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, String> {
@@ -79,85 +90,148 @@ pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, String> {
         .as_ref()
         .map(|f| fingerprint::of_run(&job.sequence.scene, &job.sequence.settings, &f.format));
     let window = job.threads + EXTRA_IN_FLIGHT;
-    let (tx, rx) = mpsc::channel::<Result<Done, String>>();
+    let (tx, rx) = mpsc::channel::<(u64, Result<Done, String>)>();
     let mut pending = job.tasks.iter().copied();
-    let mut stream = job.stream.map(|_| Reorder::new(&job.tasks));
-    let (mut in_flight, mut written) = (0, 0);
-    let mut stop: Option<Result<Outcome, String>> = None;
+    let mut d = Delivery {
+        job: &job,
+        progress,
+        stream: job.stream.map(|_| Reorder::new(&job.tasks)),
+        written: 0,
+        held: Vec::new(),
+        claimed: Vec::new(),
+        stop: None,
+    };
+    let mut in_flight = 0;
     loop {
-        while stop.is_none() && in_flight < window {
+        while d.stop.is_none() && in_flight < window {
             if interrupted() {
-                stop = Some(Ok(Outcome::Interrupted { written: 0 }));
+                d.stop = Some(Ok(Outcome::Interrupted { written: 0 }));
                 break;
             }
             let Some(task) = pending.next() else { break };
-            let (tx, seq, files, run_hash) = (
-                tx.clone(),
-                Arc::clone(&job.sequence),
-                job.files.clone(),
-                run_hash,
-            );
+            if !d.claim(task.frame) {
+                continue;
+            }
+            let (tx, seq, files) = (tx.clone(), Arc::clone(&job.sequence), job.files.clone());
             let stream_format = job.stream;
             in_flight += 1;
             pool.spawn(move || {
-                let done = produce(
-                    &seq,
-                    task,
-                    files.as_ref().zip(run_hash.as_ref()),
-                    stream_format,
-                );
-                let _ = tx.send(done);
+                let files = files.as_ref().zip(run_hash.as_ref());
+                let _ = tx.send((task.frame, produce(&seq, task, files, stream_format)));
             });
         }
         if in_flight == 0 {
             break;
         }
-        let done = rx.recv().map_err(|e| format!("worker lost: {e}"))?;
-        in_flight -= 1;
-        let done = match done {
-            Ok(d) => d,
-            Err(e) => {
-                stop.get_or_insert(Err(e));
-                continue;
+        d.heartbeat();
+        match rx.recv_timeout(Duration::from_millis(500)) {
+            Ok((frame, done)) => {
+                in_flight -= 1;
+                d.deliver(frame, done);
             }
-        };
-        if let (Some(bytes), Some(files)) = (&done.file, &job.files) {
-            let path = files.pattern.frame_path(done.frame);
-            if let Err(e) = output::atomic::write_atomic(&path, bytes) {
-                stop.get_or_insert(Err(format!("{}: cannot write: {e}", path.display())));
-                continue;
-            }
-            written += 1;
-            progress.frame_done(done.frame, &path.display().to_string(), done.seconds);
+            Err(mpsc::RecvTimeoutError::Timeout) => {}
+            Err(e) => return Err(format!("worker lost: {e}")),
         }
-        if let (Some(order), Some(bytes)) = (stream.as_mut(), done.stream) {
-            if stop
-                .as_ref()
-                .is_some_and(|s| matches!(s, Ok(Outcome::ReaderClosed { .. })))
-            {
-                continue;
+    }
+    let (written, held) = (d.written, d.held);
+    match d.stop {
+        None => Ok(Outcome::Complete { written, held }),
+        Some(Ok(Outcome::Interrupted { .. })) => Ok(Outcome::Interrupted { written }),
+        Some(other) => other,
+    }
+}
+
+impl Delivery<'_> {
+    /// Claims frame `n` when cooperating; false if another process holds it.
+    fn claim(&mut self, n: u64) -> bool {
+        let (Some(claims), Some(files)) = (&self.job.claims, &self.job.files) else {
+            return true;
+        };
+        match claims.try_claim(&files.pattern.frame_path(n)) {
+            Ok(Attempt::Claimed) => {
+                self.claimed.push((n, Instant::now()));
+                true
             }
-            match order.push(done.frame, bytes, done.seconds) {
-                Ok(sent) => {
-                    for (frame, seconds) in sent.into_iter().filter(|_| done.file.is_none()) {
-                        progress.frame_done(frame, "to stdout", seconds);
-                    }
-                }
-                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
-                    stop = Some(Ok(Outcome::ReaderClosed {
-                        streamed: order.sent,
-                    }));
-                }
-                Err(e) => {
-                    stop.get_or_insert(Err(format!("stdout: cannot write the stream: {e}")));
-                }
+            Ok(Attempt::Held(_)) => {
+                self.held.push(n);
+                false
+            }
+            Err(e) => {
+                let path = Claims::path(&files.pattern.frame_path(n));
+                self.stop
+                    .get_or_insert(Err(format!("{}: cannot create claim: {e}", path.display())));
+                false
             }
         }
     }
-    match stop {
-        None => Ok(Outcome::Complete),
-        Some(Ok(Outcome::Interrupted { .. })) => Ok(Outcome::Interrupted { written }),
-        Some(other) => other,
+
+    fn heartbeat(&mut self) {
+        let (Some(claims), Some(files)) = (&self.job.claims, &self.job.files) else {
+            return;
+        };
+        for (n, last) in &mut self.claimed {
+            if last.elapsed() >= claims.heartbeat_every() {
+                claims.heartbeat(&files.pattern.frame_path(*n));
+                *last = Instant::now();
+            }
+        }
+    }
+
+    fn release(&mut self, n: u64) {
+        if let (Some(claims), Some(files)) = (&self.job.claims, &self.job.files) {
+            claims.release(&files.pattern.frame_path(n));
+            self.claimed.retain(|(f, _)| *f != n);
+        }
+    }
+
+    /// Writes a finished frame's file and stream bytes, or records why it failed.
+    fn deliver(&mut self, frame: u64, done: Result<Done, String>) {
+        let done = match done {
+            Ok(d) => d,
+            Err(e) => {
+                self.release(frame);
+                self.progress.frame_failed(frame, &e);
+                self.stop.get_or_insert(Err(e));
+                return;
+            }
+        };
+        if let (Some(bytes), Some(files)) = (&done.file, &self.job.files) {
+            let path = files.pattern.frame_path(frame);
+            let result = output::atomic::write_atomic(&path, bytes);
+            self.release(frame);
+            if let Err(e) = result {
+                let e = format!("{}: cannot write: {e}", path.display());
+                self.progress.frame_failed(frame, &e);
+                self.stop.get_or_insert(Err(e));
+                return;
+            }
+            self.written += 1;
+            self.progress
+                .frame_done(frame, &path.display().to_string(), done.seconds);
+        }
+        let closed = matches!(self.stop, Some(Ok(Outcome::ReaderClosed { .. })));
+        let (Some(order), Some(bytes)) = (self.stream.as_mut(), done.stream) else {
+            return;
+        };
+        if closed {
+            return;
+        }
+        match order.push(frame, bytes, done.seconds) {
+            Ok(sent) => {
+                for (n, seconds) in sent.into_iter().filter(|_| done.file.is_none()) {
+                    self.progress.frame_done(n, "to stdout", seconds);
+                }
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                self.stop = Some(Ok(Outcome::ReaderClosed {
+                    streamed: order.sent,
+                }));
+            }
+            Err(e) => {
+                self.stop
+                    .get_or_insert(Err(format!("stdout: cannot write the stream: {e}")));
+            }
+        }
     }
 }
 
@@ -197,7 +271,6 @@ fn produce(
         None => None,
     };
     Ok(Done {
-        frame: n,
         seconds: start.elapsed().as_secs_f64(),
         file,
         stream,

@@ -98,7 +98,8 @@ pub fn clean_leftovers(dir: &Path) -> usize {
     removed
 }
 
-fn alive(pid: i32) -> bool {
+/// Whether a process with this pid exists on this host.
+pub fn alive(pid: i32) -> bool {
     // SAFETY: signal 0 only checks that the process exists.
     pid > 0
         && (unsafe { libc::kill(pid, 0) } == 0

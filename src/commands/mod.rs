@@ -1,0 +1,181 @@
+//! The subcommands: each turns validated arguments into calls down the pipeline.
+
+mod render;
+
+use crate::Error;
+use crate::cli::{CheckArgs, Cli, Command, MeasureArgs, PreviewArgs};
+use crate::output;
+use crate::scene::{Light, Shape};
+use crate::sequence::{self, Overrides, Sequence};
+use crate::timeline::Path as TimelinePath;
+use std::path::Path;
+
+pub fn run(cli: Cli) -> Result<(), Error> {
+    match cli.command {
+        Command::Render(args) => render::render(args),
+        Command::Status(args) => render::status(args),
+        Command::Check(args) => check(args),
+        Command::Preview(args) => preview(args),
+        Command::Measure(args) => measure(args),
+    }
+}
+
+/// Writes DIR/NAME_path.png and DIR/NAME_sheet.png, printing their paths; warnings about the
+/// camera path go to stderr.
+fn preview(args: PreviewArgs) -> Result<(), Error> {
+    use crate::preview;
+    let seq = sequence::load(&args.file, &Overrides::default())?;
+    let count = seq.timeline.frame_count;
+    let frames = match &args.frames {
+        Some(spec) => spec
+            .frames(count)
+            .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
+        None => preview::evenly_spaced(count, args.tiles),
+    };
+    if frames.len() as u64 > preview::MAX_TILES {
+        return Err(Error::Usage(format!(
+            "--frames: {} frames; a contact sheet holds at most {}",
+            frames.len(),
+            preview::MAX_TILES
+        )));
+    }
+    let dir = args
+        .out
+        .unwrap_or_else(|| Path::new("frames").join(&seq.name).join("preview"));
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
+    let (plot, warnings) = preview::path_plot(&seq);
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    let plot_file = dir.join(format!("{}_path.png", seq.name));
+    preview::write_png(&plot_file, &plot).map_err(Error::Failed)?;
+    println!("{}", plot_file.display());
+    let (sheet, _) =
+        preview::contact_sheet(&seq, &frames, preview::TILE_WIDTH).map_err(Error::Failed)?;
+    let sheet_file = dir.join(format!("{}_sheet.png", seq.name));
+    preview::write_png(&sheet_file, &sheet).map_err(Error::Failed)?;
+    println!("{}", sheet_file.display());
+    Ok(())
+}
+
+fn check(args: CheckArgs) -> Result<(), Error> {
+    let seq = sequence::load(&args.file, &Overrides::default())?;
+    print!("{}", summary(&args.file.display().to_string(), &seq));
+    Ok(())
+}
+
+/// The one-screen description `rayreel check` prints.
+pub fn summary(file: &str, seq: &Sequence) -> String {
+    let scene = &seq.scene;
+    let spheres = scene
+        .objects
+        .iter()
+        .filter(|o| matches!(o.shape, Shape::Sphere { .. }))
+        .count();
+    let planes = scene.objects.len() - spheres;
+    let mut kinds = [0usize; 4];
+    for l in &scene.lights {
+        kinds[match l {
+            Light::Point { .. } => 0,
+            Light::Directional { .. } => 1,
+            Light::Spot { .. } => 2,
+            Light::Ambient { .. } => 3,
+        }] += 1;
+    }
+    let light_list: Vec<String> = ["point", "directional", "spot", "ambient"]
+        .iter()
+        .zip(kinds)
+        .filter(|(_, n)| *n > 0)
+        .map(|(k, n)| format!("{n} {k}"))
+        .collect();
+    let t = &seq.timeline;
+    let camera = match &t.path {
+        TimelinePath::Orbit(o) => format!("orbit of radius {} ({} turns)", o.radius, o.turns),
+        TimelinePath::Keys { keys, .. } if keys.len() == 1 => "still camera".to_string(),
+        TimelinePath::Keys {
+            keys,
+            interpolation,
+        } => format!(
+            "{} keyframes, {:?} interpolation",
+            keys.len(),
+            interpolation
+        )
+        .to_lowercase(),
+    };
+    let s = &seq.settings;
+    format!(
+        "{file}: ok\n  objects:    {} ({spheres} spheres, {planes} planes)\n  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  frames:     {} at {} fps ({:.2} s), {camera}\n  output:     {}\n",
+        scene.objects.len(),
+        scene.materials.len(),
+        scene.lights.len(),
+        if light_list.is_empty() {
+            "none".to_string()
+        } else {
+            light_list.join(", ")
+        },
+        s.width,
+        s.height,
+        s.max_depth,
+        t.frame_count,
+        t.fps,
+        t.frame_count as f64 / t.fps,
+        seq.output
+    )
+}
+
+fn measure(args: MeasureArgs) -> Result<(), Error> {
+    let mut seq = sequence::load(&args.file, &Overrides::default())?;
+    let count = seq.timeline.frame_count;
+    if args.frame >= count {
+        return Err(Error::Usage(format!(
+            "--frame: frame {} is outside the timeline, which has frames 0-{}",
+            args.frame,
+            count - 1
+        )));
+    }
+    let (w, h) = match args.size {
+        Some(size) => size,
+        None => {
+            let s = &seq.settings;
+            (
+                320,
+                (320.0 * f64::from(s.height) / f64::from(s.width))
+                    .round()
+                    .max(1.0) as u64,
+            )
+        }
+    };
+    let o = Overrides {
+        size: Some((w, h)),
+        ..Overrides::default()
+    };
+    seq = sequence::load(&args.file, &o)?;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("frames").join(&seq.name).join("measure"));
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
+    eprintln!(
+        "measuring frame {} of {} at {w}x{h}",
+        args.frame,
+        args.file.display()
+    );
+    let report = crate::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
+        eprintln!("  {line}")
+    })
+    .map_err(Error::Failed)?;
+    print!("{}", report.table());
+    for (name, text) in [
+        ("measure.csv", report.csv()),
+        ("measure.json", report.json()),
+        ("measure.svg", report.svg()),
+    ] {
+        let path = dir.join(name);
+        output::atomic::write_atomic(&path, text.as_bytes())
+            .map_err(|e| Error::Failed(format!("{}: cannot write: {e}", path.display())))?;
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
