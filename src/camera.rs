@@ -69,7 +69,8 @@ impl Camera {
             forward,
             right: forward.cross(up),
             up,
-            tan_half_fov: (pose.fov.to_radians() * 0.5).tan(),
+            // libm, not the platform's: the same bits on every machine.
+            tan_half_fov: libm::tan(pose.fov.to_radians() * 0.5),
         })
     }
 

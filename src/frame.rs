@@ -36,10 +36,13 @@ impl Frame {
     }
 }
 
+/// round(max · clamp(c, 0, 1)), halves rounding up. Exact without a libm call: y − trunc(y)
+/// is exact in f32 below 2^23. NaN never reaches a frame; it would map to 0.
 #[inline]
 fn quantize(c: f32, max: f32) -> f32 {
-    // NaN never reaches a frame (the tracer guarantees it); clamp maps it to 0 regardless.
-    (c.clamp(0.0, 1.0) * max).round()
+    let y = c.clamp(0.0, 1.0) * max;
+    let whole = y.trunc();
+    if y - whole >= 0.5 { whole + 1.0 } else { whole }
 }
 
 #[cfg(test)]

@@ -71,7 +71,12 @@ pub struct Row {
 /// Renders frame `n` with `settings` in place of the sequence's.
 pub fn render(seq: &Sequence, n: u64, settings: &Settings) -> Result<Frame, String> {
     let camera = Camera::new(&seq.timeline.pose_of(n)).map_err(|e| format!("frame {n}: {e}"))?;
-    Ok(tracer::render(&seq.scene, &camera, settings, n))
+    Ok(tracer::render(
+        &tracer::World::new(seq.scene.clone()),
+        &camera,
+        settings,
+        n,
+    ))
 }
 
 pub fn reference_settings(base: &Settings) -> Settings {

@@ -16,6 +16,8 @@ pub struct Material {
     pub specular: DVec3,
     /// The Blinn-Phong exponent: the YAML `shininess` divided by 4 (the talk's convention).
     pub exponent: f64,
+    /// N·H at or below which the specular power is under 1e-30 and counts as 0.
+    pub specular_floor: f64,
     pub reflection: f64,
 }
 

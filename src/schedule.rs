@@ -12,7 +12,7 @@ use crate::output::{
 };
 use crate::progress::Progress;
 use crate::sequence::Sequence;
-use crate::tracer;
+use crate::tracer::{self, World};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -90,6 +90,7 @@ pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, String> {
         .as_ref()
         .map(|f| fingerprint::of_run(&job.sequence.scene, &job.sequence.settings, &f.format));
     let window = job.threads + EXTRA_IN_FLIGHT;
+    let world = Arc::new(World::new(job.sequence.scene.clone()));
     let (tx, rx) = mpsc::channel::<(u64, Result<Done, String>)>();
     let mut pending = job.tasks.iter().copied();
     let mut d = Delivery {
@@ -113,11 +114,15 @@ pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, String> {
                 continue;
             }
             let (tx, seq, files) = (tx.clone(), Arc::clone(&job.sequence), job.files.clone());
+            let world = Arc::clone(&world);
             let stream_format = job.stream;
             in_flight += 1;
             pool.spawn(move || {
                 let files = files.as_ref().zip(run_hash.as_ref());
-                let _ = tx.send((task.frame, produce(&seq, task, files, stream_format)));
+                let _ = tx.send((
+                    task.frame,
+                    produce(&world, &seq, task, files, stream_format),
+                ));
             });
         }
         if in_flight == 0 {
@@ -235,15 +240,20 @@ impl Delivery<'_> {
     }
 }
 
-/// Renders frame `n` of the sequence.
+/// Renders frame `n` of the sequence (building its geometry; a run builds it once).
 pub fn render_frame(seq: &Sequence, n: u64) -> Result<Frame, String> {
+    render_in(&World::new(seq.scene.clone()), seq, n)
+}
+
+fn render_in(world: &World, seq: &Sequence, n: u64) -> Result<Frame, String> {
     let pose = seq.timeline.pose_of(n);
     let camera = Camera::new(&pose).map_err(|e| format!("frame {n}: {e}"))?;
-    Ok(tracer::render(&seq.scene, &camera, &seq.settings, n))
+    Ok(tracer::render(world, &camera, &seq.settings, n))
 }
 
 /// A worker's whole job for one frame: render, then encode for each sink that wants it.
 fn produce(
+    world: &World,
     seq: &Sequence,
     task: Task,
     files: Option<(&Files, &fingerprint::Hasher)>,
@@ -251,7 +261,7 @@ fn produce(
 ) -> Result<Done, String> {
     let start = Instant::now();
     let n = task.frame;
-    let frame = render_frame(seq, n)?;
+    let frame = render_in(world, seq, n)?;
     let file = match files.filter(|_| task.write_file) {
         Some((files, run_hash)) => {
             let meta = frame_meta(seq, n, run_hash);

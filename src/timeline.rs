@@ -110,7 +110,11 @@ fn orbit_at(o: &Orbit, t: f64) -> Pose {
     let turns = o.turns * t / o.duration;
     // Whole turns are reduced first so the angle stays exact however long the orbit runs.
     let angle = o.start_angle.to_radians() + std::f64::consts::TAU * turns.fract();
-    let offset = DVec3::new(o.radius * angle.sin(), o.height, o.radius * angle.cos());
+    let offset = DVec3::new(
+        o.radius * libm::sin(angle),
+        o.height,
+        o.radius * libm::cos(angle),
+    );
     Pose {
         position: o.center + offset,
         look_at: o.look_at,

@@ -1035,7 +1035,8 @@ lights:
         DVec3::Y,
         "hit point is the light"
     );
-    let color = trace(&seq.scene, centre, 3);
+    let world = rayreel::tracer::World::new(seq.scene.clone());
+    let color = trace(&world, centre, 3);
     assert!(color.is_finite(), "{color}");
     assert!(frame.pixel(16, 16).iter().all(|v| v.is_finite()));
 
@@ -1051,7 +1052,7 @@ lights:
     render(&seq, 0, "light on the plane");
     let cam = camera_of(&seq, 0);
     let centre = eye_ray(&cam, 16, 16, 33, 33);
-    assert!(trace(&seq.scene, centre, 2).is_finite());
+    assert!(trace(&rayreel::tracer::World::new(seq.scene.clone()), centre, 2).is_finite());
 }
 
 #[test]

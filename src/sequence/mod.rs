@@ -434,7 +434,14 @@ fn fov(path: &str, v: f64) -> Check<f64> {
 
 fn material(path: &str, m: &raw::Material) -> Check<Material> {
     let shininess = m.shininess.unwrap_or(100.0);
+    let exponent = shininess / 4.0;
     Ok(Material {
+        // x^e < 1e-30 ⇔ x < exp(−69.08 / e).
+        specular_floor: if exponent > 0.0 {
+            libm::exp(-69.08 / exponent)
+        } else {
+            0.0
+        },
         ambient: color(&format!("{path}.ambient"), m.ambient)?,
         diffuse: color(&format!("{path}.diffuse"), m.diffuse)?,
         specular: color(&format!("{path}.specular"), m.specular)?,
@@ -616,8 +623,8 @@ fn spot(path: &str, s: &raw::SpotLight) -> Check<Light> {
     Ok(Light::Spot {
         position: vector(&format!("{path}.position"), s.position)?,
         axis: unit(&format!("{path}.direction"), s.direction)?,
-        cos_inner: inner.to_radians().cos(),
-        cos_outer: outer.to_radians().cos(),
+        cos_inner: libm::cos(inner.to_radians()),
+        cos_outer: libm::cos(outer.to_radians()),
         intensity: intensity(path, s.ambient, s.diffuse, s.specular)?,
     })
 }
@@ -809,7 +816,7 @@ fn check_every_frame(t: &Timeline) -> Check<()> {
         // A view that swings through or close by `up` between two frames flips the picture
         // over even though no sampled frame is degenerate: the right vector whips round.
         let camera = Camera::new(&pose).and_then(|c| match previous_right {
-            Some(r) if r.dot(c.right) < MAX_ROLL_PER_FRAME_DEGREES.to_radians().cos() => {
+            Some(r) if r.dot(c.right) < libm::cos(MAX_ROLL_PER_FRAME_DEGREES.to_radians()) => {
                 Err(Degenerate::Flip)
             }
             _ => Ok(c),

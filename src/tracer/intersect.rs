@@ -25,7 +25,7 @@ pub struct Hit {
 }
 
 /// Both roots of |o + t·d − c|² = r² for unit d, smaller first, or None when the ray misses.
-#[inline]
+#[inline(always)]
 pub fn sphere_roots(center: DVec3, radius: f64, origin: DVec3, dir: DVec3) -> Option<(f64, f64)> {
     let f = origin - center;
     let b = f.dot(dir);
@@ -47,7 +47,7 @@ pub fn sphere_roots(center: DVec3, radius: f64, origin: DVec3, dir: DVec3) -> Op
 }
 
 /// Nearest t > 0 at which `ray` meets `shape`. `own` says the ray starts on this shape.
-#[inline]
+#[inline(always)]
 pub fn intersect(shape: &Shape, ray: &Ray, own: bool) -> Option<f64> {
     match *shape {
         Shape::Sphere { center, radius } => {

@@ -3,6 +3,7 @@
 //! Every pixel depends only on the scene, the camera, the frame number and its own coordinates,
 //! so a frame is byte-identical whatever the thread count or order of work.
 
+pub mod accel;
 pub mod intersect;
 pub mod sample;
 pub mod shade;
@@ -45,9 +46,23 @@ pub enum Sampler {
     Random,
 }
 
-pub fn render(scene: &Scene, camera: &Camera, settings: &Settings, frame: u64) -> Frame {
+/// A scene ready to trace: the validated data and the geometry built from it once.
+#[derive(Debug, Clone)]
+pub struct World {
+    pub scene: Scene,
+    pub geometry: accel::Geometry,
+}
+
+impl World {
+    pub fn new(scene: Scene) -> World {
+        let geometry = accel::Geometry::new(&scene.objects);
+        World { scene, geometry }
+    }
+}
+
+pub fn render(world: &World, camera: &Camera, settings: &Settings, frame: u64) -> Frame {
     let tracer = PixelTracer {
-        scene,
+        world,
         camera,
         settings,
         frame,
@@ -64,14 +79,14 @@ pub fn render(scene: &Scene, camera: &Camera, settings: &Settings, frame: u64) -
     ];
     let non_finite = AtomicU64::new(0);
     let all = Samples::All(settings.samples);
-    let mut samples = tracer.pass(&mut rgb, &mut spread, all, &|_| true, &non_finite);
+    let mut samples = tracer.pass(&mut rgb, &mut spread, all, |_| true, &non_finite);
     if let Some(a) = settings.adaptive {
         let marked = mark(&rgb, &spread, w, h, a.threshold);
         let more = Samples::More {
             have: settings.samples,
             total: a.max_samples,
         };
-        samples += tracer.pass(&mut rgb, &mut [], more, &|i| marked[i], &non_finite);
+        samples += tracer.pass(&mut rgb, &mut [], more, |i| marked[i], &non_finite);
     }
     let depth = settings.depth.then(|| tracer.depth());
     Frame {
@@ -95,7 +110,7 @@ enum Samples {
 }
 
 struct PixelTracer<'a> {
-    scene: &'a Scene,
+    world: &'a World,
     camera: &'a Camera,
     settings: &'a Settings,
     frame: u64,
@@ -109,7 +124,7 @@ impl PixelTracer<'_> {
         rgb: &mut [f32],
         spread: &mut [f32],
         samples: Samples,
-        select: &(dyn Fn(usize) -> bool + Sync),
+        select: impl Fn(usize) -> bool + Sync,
         non_finite: &AtomicU64,
     ) -> u64 {
         let w = self.settings.width as usize;
@@ -166,7 +181,7 @@ impl PixelTracer<'_> {
                 (Samples::All(n), Sampler::Stratified) => sample::offset(self.frame, index, k, n),
                 (Samples::All(_), Sampler::Random) => sample::independent(self.frame, index, k),
             };
-            let c = shade::trace(self.scene, self.eye(row, col, u, v), s.max_depth);
+            let c = shade::trace(self.world, self.eye(row, col, u, v), s.max_depth);
             sum += c;
             lo = lo.min(c);
             hi = hi.max(c);
@@ -191,7 +206,10 @@ impl PixelTracer<'_> {
         depth.par_chunks_mut(w).enumerate().for_each(|(row, d)| {
             for (col, z) in d.iter_mut().enumerate() {
                 let ray = self.eye(row as u32, col as u32, 0.5, 0.5);
-                *z = intersect::nearest(&self.scene.objects, &ray)
+                *z = self
+                    .world
+                    .geometry
+                    .nearest(&ray)
                     .map_or(f32::INFINITY, |h| h.t as f32);
             }
         });

@@ -4,27 +4,33 @@
 //! is not blocked, kd∘id·max(0, N·L) and, when N·L > 0, ks∘is·max(0, N·H)^(shininess/4) with
 //! H = normalize(L − d). A path sums i0 + r0·i1 + r0·r1·i2 + … over at most `max_depth` surfaces.
 
-use super::intersect::{Hit, Ray, nearest, normal_at, occluded};
+use super::World;
+use super::intersect::{Hit, Ray, normal_at};
 use crate::scene::{Intensity, Light, Material, Scene};
 use glam::DVec3;
 
+/// Below this weight a reflection cannot change any output value (f32 colours, half-float
+/// EXRs and 16-bit PNGs alike), so the path ends rather than crawl through subnormals.
+const NEGLIGIBLE_WEIGHT: f64 = 1e-30;
+
 /// Follows one eye ray through at most `max_depth` surfaces; returns its colour.
-pub fn trace(scene: &Scene, eye: Ray, max_depth: u32) -> DVec3 {
+pub fn trace(world: &World, eye: Ray, max_depth: u32) -> DVec3 {
+    let scene = &world.scene;
     let mut ray = eye;
     let mut color = DVec3::ZERO;
     let mut weight = DVec3::ONE;
     for _ in 0..max_depth {
-        let Some(hit) = nearest(&scene.objects, &ray) else {
+        let Some(hit) = world.geometry.nearest(&ray) else {
             color += weight * scene.background;
             break;
         };
         let (point, normal) = surface(scene, &ray, &hit);
         let material = &scene.materials[scene.objects[hit.object].material];
-        color += weight * local(scene, material, point, normal, ray.dir, hit.object);
-        if material.reflection == 0.0 {
+        color += weight * local(world, material, point, normal, ray.dir, hit.object);
+        weight *= material.reflection;
+        if weight.max_element() < NEGLIGIBLE_WEIGHT {
             break;
         }
-        weight *= material.reflection;
         ray = spawn_ray(
             point,
             ray.dir - 2.0 * ray.dir.dot(normal) * normal,
@@ -55,7 +61,7 @@ fn surface(scene: &Scene, ray: &Ray, hit: &Hit) -> (DVec3, DVec3) {
 
 /// Sum over the lights of the Blinn-Phong terms at one surface point.
 fn local(
-    scene: &Scene,
+    world: &World,
     m: &Material,
     point: DVec3,
     normal: DVec3,
@@ -63,7 +69,7 @@ fn local(
     object: usize,
 ) -> DVec3 {
     let mut sum = DVec3::ZERO;
-    for light in &scene.lights {
+    for light in &world.scene.lights {
         let (to_light, distance, scale, i) = match *light {
             Light::Ambient { color } => {
                 sum += m.ambient * color;
@@ -99,11 +105,9 @@ fn local(
         let n_dot_l = normal.dot(to_light);
         // Diffuse and specular vanish when N·L ≤ 0, so only then is a shadow ray worth tracing.
         if n_dot_l > 0.0
-            && !occluded(
-                &scene.objects,
-                &spawn_ray(point, to_light, object),
-                distance,
-            )
+            && !world
+                .geometry
+                .occluded(&spawn_ray(point, to_light, object), distance)
         {
             sum += scale * direct(m, &i, normal, to_light, n_dot_l, -dir);
         }
@@ -117,7 +121,26 @@ fn direct(m: &Material, i: &Intensity, n: DVec3, l: DVec3, n_dot_l: f64, v: DVec
     let h = (l + v).normalize();
     // N·H can exceed 1 by an ulp; clamping keeps huge exponents from amplifying it.
     let n_dot_h = n.dot(h).clamp(0.0, 1.0);
-    m.diffuse * i.diffuse * n_dot_l + m.specular * i.specular * n_dot_h.powf(m.exponent)
+    m.diffuse * i.diffuse * n_dot_l + m.specular * i.specular * specular_power(n_dot_h, m)
+}
+
+/// max(0, N·H)^exponent, with 0^0 = 1. Whole exponents (the talk's 100/4 = 25) multiply;
+/// others go through the portable `libm` pow, so every machine computes the same bits.
+/// Values whose power falls below 1e-30 give 0 before any subnormal arithmetic happens.
+#[inline]
+fn specular_power(x: f64, m: &Material) -> f64 {
+    let e = m.exponent;
+    if e == 0.0 {
+        return 1.0;
+    }
+    if x <= m.specular_floor {
+        return 0.0;
+    }
+    if e.fract() == 0.0 && e <= 4096.0 {
+        x.powi(e as i32)
+    } else {
+        libm::pow(x, e)
+    }
 }
 
 /// Unit vector from `from` to `to`, and the distance.
