@@ -19,6 +19,7 @@ Examples:
   rayreel status sequences/orbit.yaml
   rayreel check sequences/flyby.yaml
   rayreel measure sequences/orbit.yaml --frame 0
+  rayreel bench
   rayreel preview sequences/flyby.yaml --out /tmp/preview";
 
 #[derive(Debug, Parser)]
@@ -42,6 +43,9 @@ pub enum Command {
     Preview(PreviewArgs),
     /// Measure what each speed/accuracy setting costs and buys on one frame.
     Measure(MeasureArgs),
+    /// Benchmark this machine: rays/s and frames/s, thread scaling, sphere-count scaling,
+    /// and the comparison with POV-Ray when it is installed.
+    Bench(BenchArgs),
 }
 
 #[derive(Debug, Args)]
@@ -54,6 +58,19 @@ pub struct StatusArgs {
 pub struct CheckArgs {
     /// The sequence file (YAML).
     pub file: PathBuf,
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Runs per figure (the median is reported, with min and max).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    pub runs: u64,
+    /// Only this figure: render, threads, reflections, sequence, scaling or povray.
+    #[arg(long, value_parser = ["render", "threads", "reflections", "sequence", "scaling", "povray"])]
+    pub only: Option<String>,
+    /// Small sizes and scenes, to check the command quickly.
+    #[arg(long)]
+    pub quick: bool,
 }
 
 #[derive(Debug, Args)]

@@ -14,6 +14,8 @@ pub struct Frame {
     pub non_finite: u64,
     /// Eye-ray samples traced for the colour (the cost measure of sampling strategies).
     pub samples: u64,
+    /// All rays cast for the colour: eye, shadow and reflection rays.
+    pub rays: u64,
 }
 
 impl Frame {
@@ -58,6 +60,7 @@ mod tests {
             depth: None,
             non_finite: 0,
             samples: 2,
+            rays: 2,
         };
         assert_eq!(f.to_rgb8(), vec![0, 128, 255, 0, 255, 51]);
         assert_eq!(f.to_rgb16()[1], 32768);

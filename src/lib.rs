@@ -1,6 +1,7 @@
 //! rayreel: sequence file → validated scene + timeline → per-frame camera → tracer → frame
 //! buffer → sinks. `run` is the whole program behind the command line.
 
+pub mod bench;
 pub mod camera;
 pub mod claim;
 pub mod cli;

@@ -40,6 +40,8 @@ pub struct Job {
     pub tasks: Vec<Task>,
     pub files: Option<Files>,
     pub stream: Option<(StreamFormat, bool)>,
+    /// Where the stream goes: stdout for users, a sink for benchmarks.
+    pub stream_out: Option<Box<dyn Write + Send>>,
     pub threads: usize,
     /// Cooperate with other processes through claim files (files only, no stream).
     pub claims: Option<Arc<Claims>>,
@@ -78,7 +80,7 @@ struct Delivery<'a> {
     stop: Option<Result<Outcome, String>>,
 }
 
-pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, String> {
+pub fn run(mut job: Job, progress: &mut Progress) -> Result<Outcome, String> {
     return_frame_buffers_to_the_os();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(job.threads)
@@ -93,10 +95,14 @@ pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, String> {
     let world = Arc::new(World::new(job.sequence.scene.clone()));
     let (tx, rx) = mpsc::channel::<(u64, Result<Done, String>)>();
     let mut pending = job.tasks.iter().copied();
+    let out = job
+        .stream_out
+        .take()
+        .unwrap_or_else(|| Box::new(std::io::stdout()));
     let mut d = Delivery {
         job: &job,
         progress,
-        stream: job.stream.map(|_| Reorder::new(&job.tasks)),
+        stream: job.stream.map(|_| Reorder::new(&job.tasks, out)),
         written: 0,
         held: Vec::new(),
         claimed: Vec::new(),
@@ -298,6 +304,7 @@ pub fn frame_meta(seq: &Sequence, n: u64, run_hash: &fingerprint::Hasher) -> Fra
 
 /// Puts stream bytes on stdout strictly in frame order, holding early arrivals.
 struct Reorder {
+    out: Box<dyn Write + Send>,
     order: Vec<u64>,
     next: usize,
     held: BTreeMap<u64, (Vec<u8>, f64)>,
@@ -305,8 +312,9 @@ struct Reorder {
 }
 
 impl Reorder {
-    fn new(tasks: &[Task]) -> Reorder {
+    fn new(tasks: &[Task], out: Box<dyn Write + Send>) -> Reorder {
         Reorder {
+            out,
             order: tasks.iter().map(|t| t.frame).collect(),
             next: 0,
             held: BTreeMap::new(),
@@ -323,7 +331,7 @@ impl Reorder {
         seconds: f64,
     ) -> std::io::Result<Vec<(u64, f64)>> {
         self.held.insert(frame, (bytes, seconds));
-        let mut out = std::io::stdout().lock();
+        let out = &mut self.out;
         let mut sent = Vec::new();
         while let Some(&n) = self.order.get(self.next) {
             let Some((bytes, seconds)) = self.held.remove(&n) else {

@@ -3,7 +3,7 @@
 mod render;
 
 use crate::Error;
-use crate::cli::{CheckArgs, Cli, Command, MeasureArgs, PreviewArgs};
+use crate::cli::{BenchArgs, CheckArgs, Cli, Command, MeasureArgs, PreviewArgs};
 use crate::output;
 use crate::scene::{Light, Shape};
 use crate::sequence::{self, Overrides, Sequence};
@@ -17,6 +17,7 @@ pub fn run(cli: Cli) -> Result<(), Error> {
         Command::Check(args) => check(args),
         Command::Preview(args) => preview(args),
         Command::Measure(args) => measure(args),
+        Command::Bench(args) => bench(args),
     }
 }
 
@@ -178,4 +179,13 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
         eprintln!("wrote {}", path.display());
     }
     Ok(())
+}
+
+fn bench(args: BenchArgs) -> Result<(), Error> {
+    let options = crate::bench::Options {
+        runs: args.runs as usize,
+        only: args.only,
+        quick: args.quick,
+    };
+    crate::bench::run(&options, &mut |line| println!("{line}")).map_err(Error::Failed)
 }

@@ -127,6 +127,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         tasks,
         files,
         stream,
+        stream_out: None,
         threads,
         claims,
     };
@@ -149,7 +150,9 @@ fn cooperate(mut job: Job, frames: &[u64], progress: &mut Progress) -> Result<Ou
                 claims: job.claims.clone(),
                 files: job.files.clone(),
                 sequence: Arc::clone(&job.sequence),
-                ..job
+                stream: None,
+                stream_out: None,
+                threads: job.threads,
             },
             progress,
         )?;

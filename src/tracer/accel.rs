@@ -222,7 +222,8 @@ fn bounds(b: &Ball) -> (DVec3, DVec3) {
     (b.center - pad, b.center + pad)
 }
 
-/// Builds node `at` over `spheres[lo..hi]`: median split on the widest centroid axis.
+/// Builds node `at` over `spheres[lo..hi]`, split where the surface area heuristic (binned
+/// along the widest centroid axis) says rays will test the fewest spheres.
 fn build(nodes: &mut Vec<Node>, spheres: &mut [Ball], at: usize, lo: usize, hi: usize) {
     let (mut min, mut max) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     let (mut cmin, mut cmax) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
@@ -231,13 +232,14 @@ fn build(nodes: &mut Vec<Node>, spheres: &mut [Ball], at: usize, lo: usize, hi: 
         (min, max) = (min.min(a), max.max(z));
         (cmin, cmax) = (cmin.min(b.center), cmax.max(b.center));
     }
+    let leaf = Node {
+        min,
+        max,
+        first: lo as u32,
+        count: (hi - lo) as u32,
+    };
     if hi - lo <= LEAF_SIZE {
-        nodes[at] = Node {
-            min,
-            max,
-            first: lo as u32,
-            count: (hi - lo) as u32,
-        };
+        nodes[at] = leaf;
         return;
     }
     let extent = cmax - cmin;
@@ -248,25 +250,32 @@ fn build(nodes: &mut Vec<Node>, spheres: &mut [Ball], at: usize, lo: usize, hi: 
     } else {
         2
     };
-    let mid = (lo + hi) / 2;
-    spheres[lo..hi].select_nth_unstable_by(mid - lo, |a, b| {
-        a.center[axis]
-            .total_cmp(&b.center[axis])
-            .then(a.object.cmp(&b.object))
-    });
+    let mid = match sah_split(
+        &mut spheres[lo..hi],
+        axis,
+        cmin[axis],
+        extent[axis],
+        area(min, max),
+    ) {
+        Some(m) => lo + m,
+        None if hi - lo <= 4 * LEAF_SIZE => {
+            nodes[at] = leaf;
+            return;
+        }
+        None => {
+            // Coincident centres or no better split: halve by rank to keep depth bounded.
+            let mid = (lo + hi) / 2;
+            spheres[lo..hi].select_nth_unstable_by(mid - lo, |a, b| {
+                a.center[axis]
+                    .total_cmp(&b.center[axis])
+                    .then(a.object.cmp(&b.object))
+            });
+            mid
+        }
+    };
     let left = nodes.len();
-    nodes.push(Node {
-        min,
-        max,
-        first: 0,
-        count: 0,
-    });
-    nodes.push(Node {
-        min,
-        max,
-        first: 0,
-        count: 0,
-    });
+    nodes.push(leaf);
+    nodes.push(leaf);
     nodes[at] = Node {
         min,
         max,
@@ -275,6 +284,59 @@ fn build(nodes: &mut Vec<Node>, spheres: &mut [Ball], at: usize, lo: usize, hi: 
     };
     build(nodes, spheres, left, lo, mid);
     build(nodes, spheres, left + 1, mid, hi);
+}
+
+fn area(min: DVec3, max: DVec3) -> f64 {
+    let d = (max - min).max(DVec3::ZERO);
+    d.x * d.y + d.y * d.z + d.z * d.x
+}
+
+/// Partitions `spheres` at the cheapest of 16 bin boundaries; None when no split beats a leaf.
+fn sah_split(
+    spheres: &mut [Ball],
+    axis: usize,
+    start: f64,
+    extent: f64,
+    parent_area: f64,
+) -> Option<usize> {
+    const BINS: usize = 16;
+    if extent <= 0.0 || parent_area <= 0.0 {
+        return None;
+    }
+    let bin = |b: &Ball| (((b.center[axis] - start) / extent * BINS as f64) as usize).min(BINS - 1);
+    let mut boxes = [(DVec3::INFINITY, DVec3::NEG_INFINITY, 0usize); BINS];
+    for b in spheres.iter() {
+        let (lo, hi) = bounds(b);
+        let e = &mut boxes[bin(b)];
+        *e = (e.0.min(lo), e.1.max(hi), e.2 + 1);
+    }
+    // Cost of splitting after bin i: area-weighted sphere counts on both sides.
+    let sweep = |order: &mut dyn Iterator<Item = usize>| -> Vec<(f64, usize)> {
+        let (mut lo, mut hi, mut n) = (DVec3::INFINITY, DVec3::NEG_INFINITY, 0);
+        order
+            .map(|i| {
+                (lo, hi, n) = (lo.min(boxes[i].0), hi.max(boxes[i].1), n + boxes[i].2);
+                (area(lo, hi) * n as f64, n)
+            })
+            .collect()
+    };
+    let left = sweep(&mut (0..BINS));
+    let right = sweep(&mut (0..BINS).rev());
+    let (best, cost) = (0..BINS - 1)
+        .map(|i| (i, left[i].0 + right[BINS - 2 - i].0))
+        .filter(|&(i, _)| left[i].1 > 0 && right[BINS - 2 - i].1 > 0)
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    if cost >= parent_area * spheres.len() as f64 {
+        return None;
+    }
+    let mut m = 0;
+    for i in 0..spheres.len() {
+        if bin(&spheres[i]) <= best {
+            spheres.swap(i, m);
+            m += 1;
+        }
+    }
+    (m > 0 && m < spheres.len()).then_some(m)
 }
 
 #[cfg(test)]

@@ -78,15 +78,16 @@ pub fn render(world: &World, camera: &Camera, settings: &Settings, frame: u64) -
         }
     ];
     let non_finite = AtomicU64::new(0);
+    let rays = AtomicU64::new(0);
     let all = Samples::All(settings.samples);
-    let mut samples = tracer.pass(&mut rgb, &mut spread, all, |_| true, &non_finite);
+    let mut samples = tracer.pass(&mut rgb, &mut spread, all, |_| true, &non_finite, &rays);
     if let Some(a) = settings.adaptive {
         let marked = mark(&rgb, &spread, w, h, a.threshold);
         let more = Samples::More {
             have: settings.samples,
             total: a.max_samples,
         };
-        samples += tracer.pass(&mut rgb, &mut [], more, |i| marked[i], &non_finite);
+        samples += tracer.pass(&mut rgb, &mut [], more, |i| marked[i], &non_finite, &rays);
     }
     let depth = settings.depth.then(|| tracer.depth());
     Frame {
@@ -96,6 +97,7 @@ pub fn render(world: &World, camera: &Camera, settings: &Settings, frame: u64) -
         depth,
         non_finite: non_finite.into_inner(),
         samples,
+        rays: rays.into_inner(),
     }
 }
 
@@ -126,6 +128,7 @@ impl PixelTracer<'_> {
         samples: Samples,
         select: impl Fn(usize) -> bool + Sync,
         non_finite: &AtomicU64,
+        rays: &AtomicU64,
     ) -> u64 {
         let w = self.settings.width as usize;
         let traced = AtomicU64::new(0);
@@ -138,10 +141,11 @@ impl PixelTracer<'_> {
             .zip(spreads.par_iter_mut())
             .enumerate()
             .for_each(|(row, (rgb_row, spread_row))| {
-                let (mut n, mut bad) = (0, 0);
+                let (mut n, mut bad, mut cast) = (0, 0, 0);
                 for col in (0..w).filter(|col| select(row * w + col)) {
                     let px = &mut rgb_row[3 * col..3 * col + 3];
-                    let (sum, range, count) = self.pixel(row as u32, col as u32, samples);
+                    let (sum, range, count) =
+                        self.pixel(row as u32, col as u32, samples, &mut cast);
                     let mean = match samples {
                         Samples::All(n) => sum / f64::from(n),
                         Samples::More { have, total } => {
@@ -158,6 +162,7 @@ impl PixelTracer<'_> {
                     n += u64::from(count);
                 }
                 traced.fetch_add(n, Ordering::Relaxed);
+                rays.fetch_add(cast, Ordering::Relaxed);
                 if bad > 0 {
                     non_finite.fetch_add(bad, Ordering::Relaxed);
                 }
@@ -167,7 +172,7 @@ impl PixelTracer<'_> {
 
     /// Sum of the pixel's samples, their largest per-channel range, and how many there were.
     #[inline]
-    fn pixel(&self, row: u32, col: u32, samples: Samples) -> (DVec3, f32, u32) {
+    fn pixel(&self, row: u32, col: u32, samples: Samples, rays: &mut u64) -> (DVec3, f32, u32) {
         let s = self.settings;
         let index = u64::from(row) * u64::from(s.width) + u64::from(col);
         let (first, end) = match samples {
@@ -181,7 +186,7 @@ impl PixelTracer<'_> {
                 (Samples::All(n), Sampler::Stratified) => sample::offset(self.frame, index, k, n),
                 (Samples::All(_), Sampler::Random) => sample::independent(self.frame, index, k),
             };
-            let c = shade::trace(self.world, self.eye(row, col, u, v), s.max_depth);
+            let c = shade::trace_counted(self.world, self.eye(row, col, u, v), s.max_depth, rays);
             sum += c;
             lo = lo.min(c);
             hi = hi.max(c);

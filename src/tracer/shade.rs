@@ -15,18 +15,24 @@ const NEGLIGIBLE_WEIGHT: f64 = 1e-30;
 
 /// Follows one eye ray through at most `max_depth` surfaces; returns its colour.
 pub fn trace(world: &World, eye: Ray, max_depth: u32) -> DVec3 {
+    trace_counted(world, eye, max_depth, &mut 0)
+}
+
+/// `trace`, adding the rays it casts (eye, reflection and shadow rays) to `rays`.
+pub fn trace_counted(world: &World, eye: Ray, max_depth: u32, rays: &mut u64) -> DVec3 {
     let scene = &world.scene;
     let mut ray = eye;
     let mut color = DVec3::ZERO;
     let mut weight = DVec3::ONE;
     for _ in 0..max_depth {
+        *rays += 1;
         let Some(hit) = world.geometry.nearest(&ray) else {
             color += weight * scene.background;
             break;
         };
         let (point, normal) = surface(scene, &ray, &hit);
         let material = &scene.materials[scene.objects[hit.object].material];
-        color += weight * local(world, material, point, normal, ray.dir, hit.object);
+        color += weight * local(world, material, point, normal, ray.dir, hit.object, rays);
         weight *= material.reflection;
         if weight.max_element() < NEGLIGIBLE_WEIGHT {
             break;
@@ -67,6 +73,7 @@ fn local(
     normal: DVec3,
     dir: DVec3,
     object: usize,
+    rays: &mut u64,
 ) -> DVec3 {
     let mut sum = DVec3::ZERO;
     for light in &world.scene.lights {
@@ -103,12 +110,13 @@ fn local(
         }
         sum += scale * m.ambient * i.ambient;
         let n_dot_l = normal.dot(to_light);
-        // Diffuse and specular vanish when N·L ≤ 0, so only then is a shadow ray worth tracing.
-        if n_dot_l > 0.0
-            && !world
-                .geometry
-                .occluded(&spawn_ray(point, to_light, object), distance)
-        {
+        // Diffuse and specular vanish when N·L ≤ 0: a shadow ray is only worth tracing otherwise.
+        if n_dot_l <= 0.0 {
+            continue;
+        }
+        *rays += 1;
+        let shadow = spawn_ray(point, to_light, object);
+        if !world.geometry.occluded(&shadow, distance) {
             sum += scale * direct(m, &i, normal, to_light, n_dot_l, -dir);
         }
     }

@@ -1,0 +1,366 @@
+//! `rayreel bench`: speed on this machine. Every figure is the median of repeated runs with
+//! min and max, and comes with the command that reproduces it (`rayreel bench --only NAME`).
+//! The scenes are built in: the talk's scene (sequences/talk.yaml), its 24-frame orbit
+//! (sequences/bench/talk_orbit.yaml, also timed against POV-Ray when `povray` is installed),
+//! and fields of 4 to 100 000 spheres for the acceleration structure.
+
+use crate::camera::Camera;
+use crate::frame::Frame;
+use crate::output::{FileFormat, pattern::Pattern, png::Compression, stream::StreamFormat};
+use crate::progress::Progress;
+use crate::schedule::{self, Files, Job, Task};
+use crate::sequence::{self, Overrides, Sequence};
+use crate::tracer::{self, World};
+use std::fmt::Write as _;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+const TALK: &str = include_str!("../sequences/talk.yaml");
+const TALK_ORBIT: &str = include_str!("../sequences/bench/talk_orbit.yaml");
+const TALK_POV: &str = include_str!("../sequences/bench/talk_orbit.pov");
+
+/// Median, min and max of some seconds.
+#[derive(Debug, Clone, Copy)]
+pub struct Timing {
+    pub median: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+fn timing(mut t: Vec<f64>) -> Timing {
+    t.sort_by(f64::total_cmp);
+    Timing {
+        median: t[t.len() / 2],
+        min: t[0],
+        max: t[t.len() - 1],
+    }
+}
+
+fn repeat(runs: usize, mut f: impl FnMut() -> Result<(), String>) -> Result<Timing, String> {
+    let mut t = Vec::with_capacity(runs);
+    for _ in 0..runs {
+        let start = Instant::now();
+        f()?;
+        t.push(start.elapsed().as_secs_f64());
+    }
+    Ok(timing(t))
+}
+
+fn load(text: &str, size: (u64, u64)) -> Result<Sequence, String> {
+    let o = Overrides {
+        size: Some(size),
+        ..Overrides::default()
+    };
+    sequence::parse(Path::new("bench.yaml"), text, &o).map_err(|e| e.to_string())
+}
+
+fn pool(threads: usize) -> Result<rayon::ThreadPool, String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| e.to_string())
+}
+
+/// Renders frame 0 `runs` times on `threads` threads; returns the timing and one frame.
+fn render_only(
+    world: &World,
+    seq: &Sequence,
+    threads: usize,
+    runs: usize,
+) -> Result<(Timing, Frame), String> {
+    let camera = Camera::new(&seq.timeline.pose_of(0)).map_err(|e| e.to_string())?;
+    let pool = pool(threads)?;
+    let mut frame = None;
+    let t = pool.install(|| {
+        repeat(runs, || {
+            frame = Some(tracer::render(world, &camera, &seq.settings, 0));
+            Ok(())
+        })
+    })?;
+    Ok((t, frame.expect("ran")))
+}
+
+/// Runs the real scheduler over `frames` frames, to PNG files in `dir` or to a raw stream.
+fn sequence_run(
+    seq: &Sequence,
+    frames: u64,
+    threads: usize,
+    png_in: Option<&Path>,
+) -> Result<f64, String> {
+    let files = match png_in {
+        Some(dir) => Some(Files {
+            pattern: Pattern::new(&dir.join("f_####.png").to_string_lossy(), frames)?,
+            format: FileFormat::Png {
+                sixteen_bit: false,
+                compression: Compression::Fast,
+            },
+        }),
+        None => None,
+    };
+    let job = Job {
+        sequence: Arc::new(seq.clone()),
+        tasks: (0..frames)
+            .map(|frame| Task {
+                frame,
+                write_file: png_in.is_some(),
+            })
+            .collect(),
+        files,
+        stream: png_in.is_none().then_some((StreamFormat::Raw, false)),
+        stream_out: Some(Box::new(std::io::sink())),
+        threads,
+        claims: None,
+    };
+    let start = Instant::now();
+    schedule::run(job, &mut Progress::new(frames, frames, true))?;
+    Ok(start.elapsed().as_secs_f64())
+}
+
+/// A field of `n` spheres on a plane, under one light, seen from above at an angle.
+pub fn field(n: usize) -> String {
+    let side = (n as f64).sqrt().ceil() as usize;
+    let spacing = 20.0 / side as f64;
+    let mut s = String::from(
+        "render: { width: 640, height: 360, max_depth: 2 }\ncamera: { position: [0, 8, 14], look_at: [0, 0, 0], fov: 70 }\nmaterials:\n  ball: { ambient: [0.1, 0, 0], diffuse: [0.7, 0.2, 0.1], specular: [1, 1, 1], shininess: 100, reflection: 0.3 }\n  floor: { ambient: [0.1, 0.1, 0.1], diffuse: [0.6, 0.6, 0.6], reflection: 0.2 }\nlights:\n  - point: { position: [5, 10, 8], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }\nobjects:\n  - plane: { point: [0, 0, 0], normal: [0, 1, 0], material: floor }\n",
+    );
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut rnd = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for i in 0..n {
+        let (gx, gz) = ((i % side) as f64, (i / side) as f64);
+        let r = spacing * (0.15 + 0.25 * rnd());
+        let x = -10.0 + spacing * (gx + 0.5) + (rnd() - 0.5) * 0.3 * spacing;
+        let z = -10.0 + spacing * (gz + 0.5) + (rnd() - 0.5) * 0.3 * spacing;
+        let _ = writeln!(
+            s,
+            "  - sphere: {{ center: [{x:.5}, {r:.5}, {z:.5}], radius: {r:.5}, material: ball }}"
+        );
+    }
+    s
+}
+
+pub struct Options {
+    pub runs: usize,
+    pub only: Option<String>,
+    /// Smaller sizes and fields, for tests of the command itself.
+    pub quick: bool,
+}
+
+/// Runs the benchmarks, printing lines as they finish.
+pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
+    let want = |name: &str| o.only.as_deref().is_none_or(|w| w == name);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let (w, h) = if o.quick { (320, 180) } else { (1920, 1080) };
+    out(&format!(
+        "rayreel bench: {} ({cores} threads), {}",
+        cpu_model(),
+        today()
+    ));
+    out(&format!(
+        "each figure: median (min-max) of {} runs; reproduce with the command after it",
+        o.runs
+    ));
+    let talk = load(TALK, (w, h))?;
+    let world = World::new(talk.scene.clone());
+    let cmd = |name: &str| {
+        format!(
+            "rayreel bench --only {name}{}",
+            if o.quick { " --quick" } else { "" }
+        )
+    };
+    if want("render") || want("threads") {
+        let (t2, frame) = render_only(&world, &talk, cores, o.runs)?;
+        let rays = frame.rays as f64;
+        out(&format!(
+            "talk {w}x{h} 1 spp depth 3, render only, {cores} threads: {:.1} frames/s ({:.1}-{:.1}), {:.1} M rays/s, {:.2} rays/pixel   [{}]",
+            1.0 / t2.median,
+            1.0 / t2.max,
+            1.0 / t2.min,
+            rays / t2.median / 1e6,
+            rays / (w * h) as f64,
+            cmd("render")
+        ));
+        if want("threads") && cores > 1 {
+            let (t1, _) = render_only(&world, &talk, 1, o.runs)?;
+            out(&format!(
+                "  1 thread: {:.1} frames/s; {cores} threads over 1: {:.2}x   [{}]",
+                1.0 / t1.median,
+                t1.median / t2.median,
+                cmd("threads")
+            ));
+        }
+    }
+    if want("reflections") {
+        let flat = load(&TALK.replace("reflection: 0.5", "reflection: 0"), (w, h))?;
+        let (tf, f) = render_only(&World::new(flat.scene.clone()), &flat, cores, o.runs)?;
+        let (tr, r) = render_only(&world, &talk, cores, o.runs)?;
+        out(&format!(
+            "talk without reflections: {:.1} frames/s ({} rays) vs with: {:.1} frames/s ({} rays): {:.2}x cheaper   [{}]",
+            1.0 / tf.median,
+            f.rays,
+            1.0 / tr.median,
+            r.rays,
+            tr.median / tf.median,
+            cmd("reflections")
+        ));
+    }
+    if want("sequence") {
+        let frames = if o.quick { 4 } else { 12 };
+        let orbit = load(TALK_ORBIT, (w, h))?;
+        let dir = std::env::temp_dir().join(format!("rayreel-bench-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+        let raw = timing(
+            (0..o.runs)
+                .map(|_| sequence_run(&orbit, frames, cores, None))
+                .collect::<Result<_, _>>()?,
+        );
+        let png = timing(
+            (0..o.runs)
+                .map(|_| {
+                    let _ = std::fs::remove_dir_all(&dir);
+                    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+                    sequence_run(&orbit, frames, cores, Some(&dir))
+                })
+                .collect::<Result<_, _>>()?,
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+        let f = frames as f64;
+        out(&format!(
+            "talk orbit {frames} frames {w}x{h}: raw stream {:.1} frames/s, PNG files (fast deflate, written and synced) {:.1} frames/s   [{}]",
+            f / raw.median,
+            f / png.median,
+            cmd("sequence")
+        ));
+    }
+    if want("scaling") {
+        scaling(o, out, &cmd("scaling"))?;
+    }
+    if want("povray") {
+        povray(o, out, &cmd("povray"))?;
+    }
+    Ok(())
+}
+
+/// Per-ray cost as the sphere count grows, with the hierarchy's build time.
+fn scaling(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), String> {
+    let counts: &[usize] = if o.quick {
+        &[4, 100, 1000]
+    } else {
+        &[4, 100, 1000, 10_000, 100_000]
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut base = None;
+    out(&format!(
+        "spheres   bvh build   frame 640x360   ns/ray   vs 4 spheres   [{cmd}]"
+    ));
+    for &n in counts {
+        let seq = sequence::parse(Path::new("field.yaml"), &field(n), &Overrides::default())
+            .map_err(|e| e.to_string())?;
+        let start = Instant::now();
+        let world = World::new(seq.scene.clone());
+        let build = start.elapsed().as_secs_f64();
+        let (t, frame) = render_only(&world, &seq, cores, o.runs)?;
+        let per_ray = t.median * cores as f64 / frame.rays as f64 * 1e9;
+        let ratio = per_ray / *base.get_or_insert(per_ray);
+        out(&format!(
+            "{n:>7}   {:>7.1} ms   {:>9.1} ms   {per_ray:>6.0}   {ratio:>6.2}x{}",
+            build * 1e3,
+            t.median * 1e3,
+            if world.geometry.has_bvh() {
+                ""
+            } else {
+                "   (no hierarchy: too few spheres)"
+            }
+        ));
+    }
+    Ok(())
+}
+
+/// The 24-frame 640x360 orbit end to end (the binary, to PNG files) against POV-Ray 3.7.
+fn povray(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), String> {
+    let dir = std::env::temp_dir().join(format!("rayreel-pov-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let (seq_file, pov_file) = (dir.join("talk_orbit.yaml"), dir.join("talk_orbit.pov"));
+    std::fs::write(&seq_file, TALK_ORBIT).map_err(|e| e.to_string())?;
+    std::fs::write(&pov_file, TALK_POV).map_err(|e| e.to_string())?;
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let ours = repeat(o.runs, || {
+        let _ = std::fs::remove_dir_all(dir.join("rr"));
+        let status = std::process::Command::new(&exe)
+            .args(["render", &seq_file.to_string_lossy(), "-q", "-o"])
+            .arg(dir.join("rr/frame_##.png"))
+            .status()
+            .map_err(|e| e.to_string())?;
+        status
+            .success()
+            .then_some(())
+            .ok_or("rayreel render failed".to_string())
+    })?;
+    let mut line = format!(
+        "talk orbit 24 frames 640x360 to PNG, end to end: rayreel {:.2} s ({:.2}-{:.2})",
+        ours.median, ours.min, ours.max
+    );
+    let pov = std::process::Command::new("povray")
+        .arg("--version")
+        .output();
+    if pov.is_ok() {
+        let theirs = repeat(o.runs.min(3), || {
+            std::fs::create_dir_all(dir.join("pov")).map_err(|e| e.to_string())?;
+            let status = std::process::Command::new("povray")
+                .arg(format!("+I{}", pov_file.display()))
+                .args(["+W640", "+H360", "+KFI0", "+KFF23", "-A", "-D", "-V", "-GA"])
+                .arg(format!(
+                    "+WT{}",
+                    std::thread::available_parallelism().map_or(1, |n| n.get())
+                ))
+                .arg(format!("+O{}", dir.join("pov/frame.png").display()))
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::null())
+                .status()
+                .map_err(|e| e.to_string())?;
+            status
+                .success()
+                .then_some(())
+                .ok_or("povray failed".to_string())
+        })?;
+        let _ = write!(
+            line,
+            "; POV-Ray 3.7 {:.2} s ({:.2}-{:.2}): rayreel is {:.1}x faster",
+            theirs.median,
+            theirs.min,
+            theirs.max,
+            theirs.median / ours.median
+        );
+    } else {
+        line.push_str("; povray not installed (apt-get install povray) so no comparison");
+    }
+    out(&format!("{line}   [{cmd}]"));
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string())
+}
+
+fn today() -> String {
+    std::process::Command::new("date")
+        .arg("+%Y-%m-%d")
+        .output()
+        .ok()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_default()
+}
