@@ -22,27 +22,56 @@ fn rays(n: usize) -> Vec<Ray> {
     (0..n)
         .map(|i| {
             let (x, y) = ((i % 64) as f64 / 32.0 - 1.0, (i / 64) as f64 / 32.0 - 0.5);
-            Ray { origin: DVec3::new(0.0, 0.0, 1.0), dir: DVec3::new(x, y, -1.0).normalize(), leaving: None }
+            Ray {
+                origin: DVec3::new(0.0, 0.0, 1.0),
+                dir: DVec3::new(x, y, -1.0).normalize(),
+                leaving: None,
+            }
         })
         .collect()
 }
 
 fn kernels(c: &mut Criterion) {
     let rays = rays(4096);
-    let sphere = Shape::Sphere { center: DVec3::new(-0.2, 0.0, -1.0), radius: 0.7 };
-    let floor = Shape::Sphere { center: DVec3::new(0.0, -9000.0, 0.0), radius: 8999.3 };
-    let plane = Shape::Plane { point: DVec3::new(0.0, -0.7, 0.0), normal: DVec3::Y };
-    for (name, shape) in [("sphere", sphere), ("giant sphere", floor), ("plane", plane)] {
+    let sphere = Shape::Sphere {
+        center: DVec3::new(-0.2, 0.0, -1.0),
+        radius: 0.7,
+    };
+    let floor = Shape::Sphere {
+        center: DVec3::new(0.0, -9000.0, 0.0),
+        radius: 8999.3,
+    };
+    let plane = Shape::Plane {
+        point: DVec3::new(0.0, -0.7, 0.0),
+        normal: DVec3::Y,
+    };
+    for (name, shape) in [
+        ("sphere", sphere),
+        ("giant sphere", floor),
+        ("plane", plane),
+    ] {
         c.bench_function(&format!("intersect {name} x4096"), |b| {
-            b.iter(|| rays.iter().filter(|r| intersect(black_box(&shape), r, false).is_some()).count())
+            b.iter(|| {
+                rays.iter()
+                    .filter(|r| intersect(black_box(&shape), r, false).is_some())
+                    .count()
+            })
         });
     }
     let world = talk();
     c.bench_function("nearest hit, talk scene x4096", |b| {
-        b.iter(|| rays.iter().filter(|r| world.geometry.nearest(black_box(r)).is_some()).count())
+        b.iter(|| {
+            rays.iter()
+                .filter(|r| world.geometry.nearest(black_box(r)).is_some())
+                .count()
+        })
     });
     c.bench_function("trace depth 3, talk scene x4096", |b| {
-        b.iter(|| rays.iter().map(|r| trace(&world, *black_box(r), 3).x).sum::<f64>())
+        b.iter(|| {
+            rays.iter()
+                .map(|r| trace(&world, *black_box(r), 3).x)
+                .sum::<f64>()
+        })
     });
 }
 

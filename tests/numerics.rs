@@ -1204,15 +1204,22 @@ fn sizes_beyond_the_limit_are_rejected_before_allocating() {
         let field = key.split(':').next().unwrap();
         assert!(err.contains(&format!("render.{field}")), "{err}");
     }
-    // The largest accepted size loads (nothing is allocated before rendering).
+    // The largest accepted sizes load (nothing is allocated before rendering): 16384 on a
+    // side, and width × height up to 2^26 pixels.
     let seq = parse_with(
         base,
         &Overrides {
-            size: Some((16_384, 16_384)),
+            size: Some((16_384, 4096)),
             ..Overrides::default()
         },
     );
-    assert_eq!((seq.settings.width, seq.settings.height), (16_384, 16_384));
+    assert_eq!((seq.settings.width, seq.settings.height), (16_384, 4096));
+    let too_many = Overrides {
+        size: Some((16_384, 16_384)),
+        ..Overrides::default()
+    };
+    let err = sequence::parse(Path::new("s.yaml"), base, &too_many).unwrap_err().to_string();
+    assert!(err.contains("268435456 pixels"), "{err}");
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -131,12 +131,58 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         threads,
         claims,
     };
+    let written: Vec<u64> = job
+        .tasks
+        .iter()
+        .filter(|t| t.write_file)
+        .map(|t| t.frame)
+        .collect();
+    let (seq, files) = (Arc::clone(&job.sequence), job.files.clone());
     let outcome = match job.claims.is_some() {
         true => cooperate(job, &frames, &mut progress),
         false => schedule::run(job, &mut progress),
     };
     progress.finish();
+    if let (Ok(Outcome::Complete { .. }), Some(files)) = (&outcome, &files) {
+        verify(&seq, &written, files)?;
+    }
     finish(outcome, plan.as_ref())
+}
+
+/// After a complete run, every frame it wrote must still be there and intact: a file that
+/// vanished or was replaced meanwhile (another program, a full disk elsewhere) is reported
+/// rather than assumed done.
+fn verify(seq: &Sequence, written: &[u64], files: &Files) -> Result<(), Error> {
+    let check = plan::plan(seq, written, files, false);
+    let bad: Vec<String> = check
+        .frames
+        .iter()
+        .filter(|(_, s)| *s != State::UpToDate)
+        .map(|(n, s)| {
+            format!(
+                "{} ({})",
+                files.pattern.frame_path(*n).display(),
+                describe(s)
+            )
+        })
+        .collect();
+    if bad.is_empty() {
+        return Ok(());
+    }
+    Err(Error::Failed(format!(
+        "frames written by this run changed before it ended: {}; run the same command again to render them",
+        bad.join(", ")
+    )))
+}
+
+fn describe(s: &State) -> String {
+    match s {
+        State::UpToDate => "up to date".into(),
+        State::Stale => "replaced by a different render".into(),
+        State::Missing => "vanished".into(),
+        State::Corrupt(why) => format!("now corrupt: {why}"),
+        State::Foreign => "replaced by a file rayreel did not write".into(),
+    }
 }
 
 /// Claim mode: render what can be claimed, then keep re-planning until every frame is up to

@@ -5,8 +5,11 @@
 //! The checks below work on the parsed structs and name the field by its path; `locate` then
 //! finds that path's line and column by walking the document once more.
 
+mod guard;
 mod locate;
 pub mod raw;
+
+pub use guard::nesting_depth;
 
 use crate::camera::{Camera, Degenerate, Pose};
 use crate::output::pattern::Pattern;
@@ -20,6 +23,11 @@ use std::path::{Path, PathBuf};
 
 /// Largest width or height accepted, in pixels.
 pub const MAX_DIMENSION: u64 = 16384;
+/// Largest width × height: a frame in flight takes 12 bytes a pixel (16 with depth), and a
+/// run keeps a few in flight.
+pub const MAX_PIXELS: u64 = 1 << 26;
+/// Largest number of objects in a scene.
+pub const MAX_OBJECTS: usize = 1_000_000;
 /// Largest `max_depth` accepted.
 pub const MAX_DEPTH: u64 = 10_000;
 /// Largest shininess accepted (the exponent is shininess / 4).
@@ -36,6 +44,14 @@ pub const MAX_MAGNITUDE: f64 = 1e100;
 pub const MIN_RADIUS: f64 = 1e-100;
 /// Largest frames per second accepted.
 pub const MAX_FPS: f64 = 1000.0;
+/// Largest sequence file accepted, in bytes; larger files are refused before they are read.
+/// serde_yaml holds a whole document as events before checking it, about 40 bytes of memory
+/// per byte of dense YAML, so this bounds what a file can make the parser allocate.
+pub const MAX_FILE_BYTES: u64 = 16 << 20;
+/// Deepest nesting accepted, checked by a linear pre-scan before parsing (see `guard`): libyaml
+/// takes time quadratic in the depth of `[[[[…`, and a real sequence file nests about 10 deep
+/// by that count.
+pub const MAX_NESTING: usize = 64;
 
 /// A validated sequence file: everything needed to render any of its frames.
 #[derive(Debug, Clone, PartialEq)]
@@ -78,6 +94,8 @@ pub enum LoadError {
     },
     #[error("{flag}: {message}")]
     Flag { flag: &'static str, message: String },
+    #[error("{file}: {size}; sequence files are limited to {} MiB", MAX_FILE_BYTES >> 20)]
+    TooLarge { file: PathBuf, size: String },
 }
 
 /// A rejected value: the YAML path of the field and what is wrong with it.
@@ -97,15 +115,62 @@ fn invalid<T>(path: impl Into<String>, message: impl Into<String>) -> Check<T> {
 }
 
 pub fn load(file: &Path, overrides: &Overrides) -> Result<Sequence, LoadError> {
-    let text = std::fs::read_to_string(file).map_err(|source| LoadError::Io {
+    use std::io::Read;
+    let io = |source| LoadError::Io {
         file: file.to_owned(),
         source,
+    };
+    let f = std::fs::File::open(file).map_err(io)?;
+    if let Ok(meta) = f.metadata()
+        && meta.len() > MAX_FILE_BYTES
+    {
+        return Err(too_large(file, meta.len()));
+    }
+    // Pipes and special files have no length up front: read one byte past the limit at most.
+    let mut bytes = Vec::new();
+    f.take(MAX_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(LoadError::TooLarge {
+            file: file.to_owned(),
+            size: format!("the file is larger than {} MiB", MAX_FILE_BYTES >> 20),
+        });
+    }
+    let text = String::from_utf8(bytes).map_err(|_| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "stream did not contain valid UTF-8",
+        ))
     })?;
     parse(file, &text, overrides)
 }
 
+fn too_large(file: &Path, len: u64) -> LoadError {
+    LoadError::TooLarge {
+        file: file.to_owned(),
+        size: format!(
+            "the file is {:.1} MiB ({len} bytes)",
+            len as f64 / (1u64 << 20) as f64
+        ),
+    }
+}
+
 /// `load` for text already in memory; `file` is only used to name things.
 pub fn parse(file: &Path, text: &str, overrides: &Overrides) -> Result<Sequence, LoadError> {
+    if text.len() as u64 > MAX_FILE_BYTES {
+        return Err(too_large(file, text.len() as u64));
+    }
+    if let Some((line, col)) = guard::first_too_deep(text, MAX_NESTING) {
+        return Err(LoadError::Invalid {
+            file: file.to_owned(),
+            line,
+            col,
+            message: format!(
+                "nested too deeply: more than {MAX_NESTING} levels of collections here (a sequence file needs about 10)"
+            ),
+        });
+    }
     let raw: raw::Sequence = serde_yaml::from_str(text).map_err(|e| yaml_error(file, &e))?;
     let name = file
         .file_stem()
@@ -113,7 +178,7 @@ pub fn parse(file: &Path, text: &str, overrides: &Overrides) -> Result<Sequence,
         .unwrap_or_else(|| "sequence".into());
     let mut seq = validate(raw, &name).map_err(|e| {
         let (line, col) = locate::locate(text, &e.path);
-        let message = format!("{}: {}", e.path, e.message);
+        let message = clip(format!("{}: {}", e.path, e.message));
         LoadError::Invalid {
             file: file.to_owned(),
             line,
@@ -134,17 +199,47 @@ fn yaml_error(file: &Path, e: &serde_yaml::Error) -> LoadError {
         Some(i) => text[..i].to_string(),
         None => text,
     };
-    let message = if message.is_empty() {
-        "invalid YAML".into()
-    } else {
-        message
+    // serde_yaml's two guards against hostile documents say little on their own.
+    let message = match message.as_str() {
+        "" => "invalid YAML".into(),
+        "recursion limit exceeded" => {
+            "nested too deeply, counting what aliases repeat (recursion limit exceeded)".into()
+        }
+        "repetition limit exceeded" => {
+            "aliases repeat too many nodes (repetition limit exceeded)".into()
+        }
+        _ => message,
     };
     LoadError::Invalid {
         file: file.to_owned(),
         line,
         col,
-        message,
+        message: clip(message),
     }
+}
+
+/// Longest error message shown whole; longer ones quote some huge value from the file.
+const MAX_MESSAGE: usize = 400;
+
+/// `message`, cut in the middle when it is too long to read.
+fn clip(message: String) -> String {
+    if message.len() <= MAX_MESSAGE {
+        return message;
+    }
+    let mut head = MAX_MESSAGE / 2;
+    while !message.is_char_boundary(head) {
+        head -= 1;
+    }
+    let mut tail = message.len() - MAX_MESSAGE / 4;
+    while !message.is_char_boundary(tail) {
+        tail += 1;
+    }
+    format!(
+        "{} [… {} bytes …] {}",
+        &message[..head],
+        tail - head,
+        &message[tail..]
+    )
 }
 
 fn apply(seq: &mut Sequence, o: &Overrides) -> Result<(), LoadError> {
@@ -165,15 +260,55 @@ fn apply(seq: &mut Sequence, o: &Overrides) -> Result<(), LoadError> {
     if let Some((w, h)) = o.size {
         seq.settings.width = dimension(w).map_err(|m| flag("--size", format!("width {m}")))?;
         seq.settings.height = dimension(h).map_err(|m| flag("--size", format!("height {m}")))?;
+        pixels(seq.settings.width, seq.settings.height).map_err(|m| flag("--size", m))?;
     }
     if let Some(d) = o.max_depth {
         seq.settings.max_depth = max_depth(d).map_err(|m| flag("--max-depth", m))?;
     }
     if let Some(out) = &o.output {
-        Pattern::new(out, seq.timeline.frame_count).map_err(|m| flag("--output", m))?;
+        output_pattern(out, seq.timeline.frame_count).map_err(|m| flag("--output", m))?;
         seq.output = out.clone();
     }
     seq.settings.depth |= o.depth;
+    Ok(())
+}
+
+/// A pattern that names frames of a type rayreel writes.
+fn output_pattern(output: &str, frame_count: u64) -> Result<Pattern, String> {
+    let pattern = Pattern::new(output, frame_count)?;
+    match pattern.extension().as_str() {
+        "png" | "exr" => Ok(pattern),
+        other => Err(format!(
+            "unsupported file type `.{other}`; frames are .png or .exr (got `{output}`)"
+        )),
+    }
+}
+
+/// A sequence file may come from someone else, so its `output` stays below the current
+/// directory; the user can still write anywhere with `--output`, which they typed themselves.
+fn contained(path: &str, output: &str) -> Check<()> {
+    let p = Path::new(output);
+    let climbs = p
+        .components()
+        .any(|c| matches!(c, std::path::Component::ParentDir));
+    if p.is_absolute() || climbs || output.starts_with('~') {
+        return invalid(
+            path,
+            format!(
+                "a sequence file may only write below the current directory, so an absolute path or `..` is refused here (got `{output}`); if you mean it, give it on the command line with --output"
+            ),
+        );
+    }
+    Ok(())
+}
+
+fn pixels(w: u32, h: u32) -> Result<(), String> {
+    let n = u64::from(w) * u64::from(h);
+    if n > MAX_PIXELS {
+        return Err(format!(
+            "{w}x{h} is {n} pixels; a frame may have at most {MAX_PIXELS} (e.g. 8192x8192)"
+        ));
+    }
     Ok(())
 }
 
@@ -207,6 +342,15 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<Sequence> {
     }
     let names: Vec<&str> = raw.materials.0.iter().map(|(n, _)| n.as_str()).collect();
     let mut objects = Vec::new();
+    if raw.objects.len() > MAX_OBJECTS {
+        return invalid(
+            "objects",
+            format!(
+                "at most {MAX_OBJECTS} objects are accepted (got {})",
+                raw.objects.len()
+            ),
+        );
+    }
     for (i, o) in raw.objects.iter().enumerate() {
         objects.push(object(&format!("objects[{i}]"), o, &names, &mut materials)?);
     }
@@ -231,7 +375,8 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<Sequence> {
         settings,
         output: match raw.output {
             Some(o) => {
-                Pattern::new(&o, timeline.frame_count).or_else(|m| invalid("output", m))?;
+                output_pattern(&o, timeline.frame_count).or_else(|m| invalid("output", m))?;
+                contained("output", &o)?;
                 o
             }
             None => format!("frames/{name}/frame_####.png"),
@@ -255,6 +400,7 @@ fn render_settings(r: &raw::Render) -> Check<Settings> {
             _ => Sampler::Stratified,
         },
     };
+    pixels(s.width, s.height).or_else(|m| invalid("render.width", m))?;
     if let Some(q) = r.quality {
         preset(&mut s, q);
     }
