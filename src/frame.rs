@@ -38,12 +38,13 @@ impl Frame {
     }
 }
 
-/// round(max · clamp(c, 0, 1)), halves rounding up. Exact without a libm call: y − trunc(y)
-/// is exact in f32 below 2^23. NaN never reaches a frame; it would map to 0.
+/// round(max · clamp(c, 0, 1)), halves rounding up, without a libm call (x86-64's baseline has
+/// no rounding instruction): the integer part and y − it are both exact for y < 2^24.
+/// NaN never reaches a frame; it would map to 0.
 #[inline]
 fn quantize(c: f32, max: f32) -> f32 {
     let y = c.clamp(0.0, 1.0) * max;
-    let whole = y.trunc();
+    let whole = y as u32 as f32;
     if y - whole >= 0.5 { whole + 1.0 } else { whole }
 }
 

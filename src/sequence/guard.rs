@@ -7,20 +7,22 @@
 //!
 //! The scan follows libyaml's scanner (unsafe-libyaml 0.2) closely enough to count no lower
 //! than it: flow brackets outside quoted scalars, comments, tags and block scalars, and block
-//! collections through libyaml's own indentation stack. A block level counts twice, since a
-//! sequence may share its mapping's column (`key:` then `- item`) and so open a collection
-//! without a new indentation level. The `fuzz/` target `nesting` checks the bound against the
-//! depth serde_yaml reaches.
+//! collections through libyaml's own indentation stack. Every level counts twice, since one
+//! may hold a second collection that opens without a bracket or indentation of its own: a
+//! sequence sharing its mapping's column (`key:` then `- item`), or a single-pair mapping in a
+//! flow sequence (`[a: [b: 1]]`). The bound is thus at most twice the real depth. The `fuzz/`
+//! target `nesting` checks it against the depth serde_yaml reaches.
 
-/// An upper bound on the nesting depth of `text`, and the 1-based line and column where it is
-/// first reached; (0, 1, 1) for a text with no collections.
+/// An upper bound on the nesting depth of `text` (at most twice the real depth), and the
+/// 1-based line and column where it is first reached; (0, 1, 1) for a text with no collections.
 pub fn nesting_depth(text: &str) -> (usize, usize, usize) {
     let mut s = Scanner::new(text, usize::MAX);
     s.run();
     (s.max, s.max_at.0, s.max_at.1)
 }
 
-/// Line and column (1-based) of the first point where the text nests deeper than `limit`.
+/// Line and column (1-based) of the first point where the bound of `nesting_depth` passes
+/// `limit`.
 pub fn first_too_deep(text: &str, limit: usize) -> Option<(usize, usize)> {
     let mut s = Scanner::new(text, limit);
     s.run();
@@ -123,7 +125,7 @@ impl<'a> Scanner<'a> {
     }
 
     fn depth(&self) -> usize {
-        2 * self.indents.len() + self.flow
+        2 * (self.indents.len() + self.flow)
     }
 
     fn note_depth(&mut self, line: usize, col: usize) {
@@ -459,10 +461,10 @@ mod tests {
     #[test]
     fn counts_flow_and_block_levels() {
         assert_eq!(depth(""), 0);
-        assert_eq!(depth("a: 1\nb: [1, [2, {c: 3}]]\n"), 2 + 3);
-        assert_eq!(depth("a:\n  b:\n    - [1]\n"), 2 * 3 + 1);
+        assert_eq!(depth("a: 1\nb: [1, [2, {c: 3}]]\n"), 2 * (1 + 3));
+        assert_eq!(depth("a:\n  b:\n    - [1]\n"), 2 * (3 + 1));
         assert_eq!(depth("- - - x\n"), 2 * 3);
-        assert_eq!(depth(&"[".repeat(1000)), 1000);
+        assert_eq!(depth(&"[".repeat(1000)), 2 * 1000);
     }
 
     #[test]
@@ -470,19 +472,21 @@ mod tests {
         assert_eq!(depth("a: '[[[[' # [[[[\nb: \"[[\\\"[[\"\n"), 2);
         assert_eq!(depth("a: x[[[[\nb: |\n  [[[[\n   [[[\nc: !<a[[[> 1\n"), 2);
         assert_eq!(depth("a: 'it''s [[['\n"), 2);
+        assert_eq!(depth("a: [!, 1]\n"), 2 * 2);
     }
 
     #[test]
     fn plain_scalars_run_on_over_indented_lines() {
         // ` 'x` continues the plain scalar `it`, so the quote opens nothing and the flow
         // sequence on the next line counts.
-        assert_eq!(depth("a: it\n 'x\nb: [[[ ']]]' ]]]\n"), 2 + 3);
+        assert_eq!(depth("a: it\n 'x\nb: [[[ ']]]' ]]]\n"), 2 * (1 + 3));
     }
 
     #[test]
     fn reports_where_the_limit_is_passed() {
         let text = format!("render:\n  width: {}\n", "[".repeat(100));
-        assert_eq!(first_too_deep(&text, 64), Some((2, 10 + 60)));
+        // Two block levels, then the 31st `[` passes 64.
+        assert_eq!(first_too_deep(&text, 64), Some((2, 10 + 30)));
         assert_eq!(first_too_deep("a: [[1]]\n", 64), None);
     }
 }

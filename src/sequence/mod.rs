@@ -48,10 +48,10 @@ pub const MAX_FPS: f64 = 1000.0;
 /// serde_yaml holds a whole document as events before checking it, about 40 bytes of memory
 /// per byte of dense YAML, so this bounds what a file can make the parser allocate.
 pub const MAX_FILE_BYTES: u64 = 16 << 20;
-/// Deepest nesting accepted, checked by a linear pre-scan before parsing (see `guard`): libyaml
-/// takes time quadratic in the depth of `[[[[…`, and a real sequence file nests about 10 deep
-/// by that count.
-pub const MAX_NESTING: usize = 64;
+/// Collections may nest this deep for sure (a sequence file needs 6 levels): a linear pre-scan
+/// (`guard`) refuses text before parsing when its bound, at most twice the real depth, passes
+/// twice this. libyaml takes time quadratic in the depth of `[[[[…`.
+pub const MAX_NESTING: usize = 32;
 
 /// A validated sequence file: everything needed to render any of its frames.
 #[derive(Debug, Clone, PartialEq)]
@@ -161,13 +161,13 @@ pub fn parse(file: &Path, text: &str, overrides: &Overrides) -> Result<Sequence,
     if text.len() as u64 > MAX_FILE_BYTES {
         return Err(too_large(file, text.len() as u64));
     }
-    if let Some((line, col)) = guard::first_too_deep(text, MAX_NESTING) {
+    if let Some((line, col)) = guard::first_too_deep(text, 2 * MAX_NESTING) {
         return Err(LoadError::Invalid {
             file: file.to_owned(),
             line,
             col,
             message: format!(
-                "nested too deeply: more than {MAX_NESTING} levels of collections here (a sequence file needs about 10)"
+                "collections nested too deeply here (a sequence file needs 6 levels; over {MAX_NESTING} are refused)"
             ),
         });
     }

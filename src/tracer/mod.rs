@@ -175,6 +175,12 @@ impl PixelTracer<'_> {
     fn pixel(&self, row: u32, col: u32, samples: Samples, rays: &mut u64) -> (DVec3, f32, u32) {
         let s = self.settings;
         let index = u64::from(row) * u64::from(s.width) + u64::from(col);
+        if let Samples::All(1) = samples {
+            // The talk's image: one ray through the pixel centre, nothing to spread.
+            let c =
+                shade::trace_counted(self.world, self.eye(row, col, 0.5, 0.5), s.max_depth, rays);
+            return (c, 0.0, 1);
+        }
         let (first, end) = match samples {
             Samples::All(n) => (0, n),
             Samples::More { have, total } => (have, total),
