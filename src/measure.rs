@@ -257,51 +257,52 @@ impl Report {
         s
     }
 
+    /// Each row as (column, value) pairs, shared by the CSV and the JSON.
+    fn records(&self) -> Vec<Vec<(&'static str, String)>> {
+        self.rows
+            .iter()
+            .map(|r| {
+                vec![
+                    ("group", format!("\"{}\"", r.group)),
+                    ("settings", format!("\"{}\"", r.label)),
+                    ("samples_per_pixel", format!("{:.4}", r.samples_per_pixel)),
+                    ("max_depth", r.settings.max_depth.to_string()),
+                    ("seconds_median", format!("{:.6}", r.seconds[0])),
+                    ("seconds_min", format!("{:.6}", r.seconds[1])),
+                    ("seconds_max", format!("{:.6}", r.seconds[2])),
+                    (
+                        "speedup",
+                        format!("{:.3}", self.reference_seconds / r.seconds[0]),
+                    ),
+                    ("rmse", format!("{:.5}", r.error.rmse)),
+                    ("psnr_db", format!("{:.3}", finite_or(r.error.psnr, 999.0))),
+                    ("max_error", r.error.max.to_string()),
+                    ("share_off", format!("{:.6}", r.error.off)),
+                ]
+            })
+            .collect()
+    }
+
     pub fn csv(&self) -> String {
-        let mut s = String::from(
-            "group,settings,samples_per_pixel,max_depth,seconds_median,seconds_min,seconds_max,speedup,rmse,psnr_db,max_error,share_off\n",
-        );
-        for r in &self.rows {
-            let _ = writeln!(
-                s,
-                "{},{},{:.4},{},{:.6},{:.6},{:.6},{:.3},{:.5},{:.3},{},{:.6}",
-                r.group,
-                r.label,
-                r.samples_per_pixel,
-                r.settings.max_depth,
-                r.seconds[0],
-                r.seconds[1],
-                r.seconds[2],
-                self.reference_seconds / r.seconds[0],
-                r.error.rmse,
-                finite_or(r.error.psnr, 999.0),
-                r.error.max,
-                r.error.off
-            );
+        let records = self.records();
+        let header: Vec<&str> = records
+            .first()
+            .map_or(Vec::new(), |r| r.iter().map(|(k, _)| *k).collect());
+        let mut s = header.join(",") + "\n";
+        for r in &records {
+            let cells: Vec<&str> = r.iter().map(|(_, v)| v.trim_matches('"')).collect();
+            s += &(cells.join(",") + "\n");
         }
         s
     }
 
     pub fn json(&self) -> String {
         let rows: Vec<String> = self
-            .rows
+            .records()
             .iter()
             .map(|r| {
-                format!(
-                    "    {{\"group\": \"{}\", \"settings\": \"{}\", \"samples_per_pixel\": {:.4}, \"max_depth\": {}, \"seconds\": {{\"median\": {:.6}, \"min\": {:.6}, \"max\": {:.6}}}, \"speedup\": {:.3}, \"rmse\": {:.5}, \"psnr_db\": {:.3}, \"max_error\": {}, \"share_off\": {:.6}}}",
-                    r.group,
-                    r.label,
-                    r.samples_per_pixel,
-                    r.settings.max_depth,
-                    r.seconds[0],
-                    r.seconds[1],
-                    r.seconds[2],
-                    self.reference_seconds / r.seconds[0],
-                    r.error.rmse,
-                    finite_or(r.error.psnr, 999.0),
-                    r.error.max,
-                    r.error.off
-                )
+                let fields: Vec<String> = r.iter().map(|(k, v)| format!("\"{k}\": {v}")).collect();
+                format!("    {{{}}}", fields.join(", "))
             })
             .collect();
         format!(

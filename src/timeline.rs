@@ -219,14 +219,18 @@ mod tests {
         }
     }
 
-    #[test]
-    fn every_key_is_hit_exactly() {
-        let keys = vec![
+    fn four_keys() -> Vec<Key> {
+        vec![
             key(0.0, 0.0, 90.0),
             key(1.0, 1.0, 60.0),
             key(2.5, 3.0, 80.0),
             key(4.0, -1.0, 50.0),
-        ];
+        ]
+    }
+
+    #[test]
+    fn every_key_is_hit_exactly() {
+        let keys = four_keys();
         for interp in [Interpolation::Linear, Interpolation::Smooth] {
             let tl = timeline(keys.clone(), interp);
             for k in &keys {
@@ -237,12 +241,7 @@ mod tests {
 
     #[test]
     fn paths_are_continuous() {
-        let keys = vec![
-            key(0.0, 0.0, 90.0),
-            key(1.0, 1.0, 60.0),
-            key(2.5, 3.0, 80.0),
-            key(4.0, -1.0, 50.0),
-        ];
+        let keys = four_keys();
         for interp in [Interpolation::Linear, Interpolation::Smooth] {
             let tl = timeline(keys.clone(), interp);
             let dt = 1e-4;

@@ -9,20 +9,9 @@ use common::*;
 use std::path::Path;
 use std::process::Command;
 
-const SEQ: &str = "
-render: { width: 320, height: 180 }
-materials:
-  red:   { ambient: [0.1, 0, 0], diffuse: [0.7, 0, 0], specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
-  floor: { ambient: [0.1, 0.1, 0.1], diffuse: [0.6, 0.6, 0.6], specular: [1, 1, 1], reflection: 0.5 }
-objects:
-  - sphere: { center: [-0.2, 0, -1], radius: 0.7, material: red }
-  - plane:  { point: [0, -0.7, 0], normal: [0, 1, 0], material: floor }
-lights:
-  - point: { position: [5, 5, 5], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }
-timeline:
-  fps: 24
-  orbit: { center: [-0.1, 0, -0.6], radius: 1.6, height: 0.35, duration: 1, look_at: [-0.1, -0.1, -0.6] }
-";
+fn seq() -> String {
+    sequence(320, 180, &orbit(24, 1.0))
+}
 
 /// A tmpfs of `size` mounted at `dir`, unmounted on drop.
 struct Tmpfs(std::path::PathBuf);
@@ -63,7 +52,7 @@ impl Drop for Tmpfs {
 
 fn setup(name: &str) -> std::path::PathBuf {
     let tmp = scratch(name);
-    std::fs::write(tmp.join("seq.yaml"), SEQ).unwrap();
+    std::fs::write(tmp.join("seq.yaml"), seq()).unwrap();
     let out = run_in(
         &tmp,
         &["render", "seq.yaml", "-o", "clean/f_####.png", "-q"],

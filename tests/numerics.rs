@@ -1218,7 +1218,9 @@ fn sizes_beyond_the_limit_are_rejected_before_allocating() {
         size: Some((16_384, 16_384)),
         ..Overrides::default()
     };
-    let err = sequence::parse(Path::new("s.yaml"), base, &too_many).unwrap_err().to_string();
+    let err = sequence::parse(Path::new("s.yaml"), base, &too_many)
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("268435456 pixels"), "{err}");
 }
 

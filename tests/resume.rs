@@ -7,18 +7,8 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-const SEQ: &str = "
-render: { width: 160, height: 90 }
-materials:
-  red:   { ambient: [0.1, 0, 0], diffuse: [0.7, 0, 0], specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
-  floor: { ambient: [0.1, 0.1, 0.1], diffuse: [0.6, 0.6, 0.6], specular: [1, 1, 1], reflection: 0.5 }
-objects:
-  - sphere: { center: [-0.2, 0, -1], radius: 0.7, material: red }
-  - sphere: { center: [0.3, -0.4, -0.2], radius: 0.2, material: red }
-  - plane:  { point: [0, -0.7, 0], normal: [0, 1, 0], material: floor }
-lights:
-  - point: { position: [5, 5, 5], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }
-timeline:
+fn seq() -> String {
+    let keys = "timeline:
   fps: 12
   interpolation: linear
   keyframes:
@@ -26,10 +16,12 @@ timeline:
     - { time: 2, position: [1.5, 0.4, 0.5] }
     - { time: 4, position: [0, 0.5, -2.5] }
 ";
+    sequence(160, 90, keys)
+}
 
 fn setup(name: &str) -> std::path::PathBuf {
     let tmp = scratch(name);
-    std::fs::write(tmp.join("seq.yaml"), SEQ).unwrap();
+    std::fs::write(tmp.join("seq.yaml"), seq()).unwrap();
     tmp
 }
 
@@ -152,7 +144,7 @@ fn editing_a_keyframe_rerenders_exactly_the_frames_it_moves() {
     );
     // Move the last key: with linear interpolation only frames 25-47 (t in (2, 4)) change;
     // frame 24 sits exactly on the middle key.
-    let edited = SEQ.replace("position: [0, 0.5, -2.5]", "position: [0.2, 0.5, -2.5]");
+    let edited = seq().replace("position: [0, 0.5, -2.5]", "position: [0.2, 0.5, -2.5]");
     std::fs::write(tmp.join("seq.yaml"), edited).unwrap();
     let dry = run_in(&tmp, &["render", "seq.yaml", "--dry-run"]);
     let plan = String::from_utf8_lossy(&dry.stdout);

@@ -5,21 +5,9 @@ mod common;
 use common::*;
 use std::path::Path;
 
-const SHORT: &str = "
-render: { width: 48, height: 27 }
-materials:
-  red:   { ambient: [0.1, 0, 0], diffuse: [0.7, 0, 0], specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
-  floor: { ambient: [0.1, 0.1, 0.1], diffuse: [0.6, 0.6, 0.6], specular: [1, 1, 1], reflection: 0.5 }
-objects:
-  - sphere: { center: [-0.2, 0, -1], radius: 0.7, material: red }
-  - sphere: { center: [0.3, -0.4, -0.2], radius: 0.2, material: red }
-  - plane:  { point: [0, -0.7, 0], normal: [0, 1, 0], material: floor }
-lights:
-  - point: { position: [5, 5, 5], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }
-timeline:
-  fps: 12
-  orbit: { center: [-0.1, 0, -0.6], radius: 1.6, height: 0.35, duration: 1, look_at: [-0.1, -0.1, -0.6] }
-";
+fn seq() -> String {
+    sequence(48, 27, &orbit(12, 1.0))
+}
 
 fn write_seq(dir: &Path, name: &str, yaml: &str) -> String {
     let path = dir.join(name);
@@ -37,7 +25,7 @@ fn render(dir: &Path, args: &[&str]) -> String {
 #[test]
 fn a_short_orbit_writes_every_numbered_frame() {
     let tmp = scratch("short");
-    let seq = write_seq(&tmp, "short.yaml", SHORT);
+    let seq = write_seq(&tmp, "short.yaml", &seq());
     let log = render(&tmp, &["render", &seq]);
     let names: Vec<String> = (0..12)
         .map(|n| format!("frames/short/frame_{n:04}.png"))
@@ -63,7 +51,7 @@ fn a_short_orbit_writes_every_numbered_frame() {
 #[test]
 fn frames_are_identical_whatever_the_threads_or_selection() {
     let tmp = scratch("determinism");
-    let seq = write_seq(&tmp, "d.yaml", SHORT);
+    let seq = write_seq(&tmp, "d.yaml", &seq());
     render(
         &tmp,
         &["render", &seq, "-o", "one/f_##.png", "--threads", "1", "-q"],
@@ -99,7 +87,7 @@ fn frames_are_identical_whatever_the_threads_or_selection() {
 #[test]
 fn frame_specs_select_frames_and_quiet_is_silent() {
     let tmp = scratch("select");
-    let seq = write_seq(&tmp, "s.yaml", SHORT);
+    let seq = write_seq(&tmp, "s.yaml", &seq());
     let log = render(
         &tmp,
         &[
@@ -122,7 +110,7 @@ fn frame_specs_select_frames_and_quiet_is_silent() {
 #[test]
 fn a_single_key_is_a_still_camera() {
     let tmp = scratch("still");
-    let yaml = SHORT.replace(
+    let yaml = seq().replace(
         "  orbit: { center: [-0.1, 0, -0.6], radius: 1.6, height: 0.35, duration: 1, look_at: [-0.1, -0.1, -0.6] }",
         "  duration: 0.25\n  keyframes:\n    - { time: 0, position: [0, 0.3, 1.5], look_at: [0, 0, -0.5] }",
     );

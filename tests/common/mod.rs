@@ -83,3 +83,27 @@ pub fn sh(dir: &Path, script: &str) -> Output {
         .output()
         .expect("bash runs")
 }
+
+/// The test scene: the talk's big red sphere and a small one over a plane floor, one light.
+pub const SCENE: &str = "materials:
+  red:   { ambient: [0.1, 0, 0], diffuse: [0.7, 0, 0], specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
+  floor: { ambient: [0.1, 0.1, 0.1], diffuse: [0.6, 0.6, 0.6], specular: [1, 1, 1], reflection: 0.5 }
+objects:
+  - sphere: { center: [-0.2, 0, -1], radius: 0.7, material: red }
+  - sphere: { center: [0.3, -0.4, -0.2], radius: 0.2, material: red }
+  - plane:  { point: [0, -0.7, 0], normal: [0, 1, 0], material: floor }
+lights:
+  - point: { position: [5, 5, 5], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }
+";
+
+/// A sequence file of the test scene at `width`×`height` with `timeline` (a YAML block).
+pub fn sequence(width: u32, height: u32, timeline: &str) -> String {
+    format!("render: {{ width: {width}, height: {height} }}\n{SCENE}{timeline}")
+}
+
+/// A `timeline:` block: a one-turn orbit of `duration` seconds at `fps`.
+pub fn orbit(fps: u32, duration: f64) -> String {
+    format!(
+        "timeline:\n  fps: {fps}\n  orbit: {{ center: [-0.1, 0, -0.6], radius: 1.6, height: 0.35, duration: {duration}, look_at: [-0.1, -0.1, -0.6] }}\n"
+    )
+}
