@@ -91,7 +91,12 @@ pub fn run(mut job: Job, progress: &mut Progress) -> Result<Outcome, String> {
         .files
         .as_ref()
         .map(|f| fingerprint::of_run(&job.sequence.scene, &job.sequence.settings, &f.format));
-    let window = job.threads + EXTRA_IN_FLIGHT;
+    let window = match job.stream {
+        // A stream has its order to keep: one frame rendering (on every thread) while the one
+        // before is written keeps memory to two frames whatever the reader does.
+        Some(_) => 2,
+        None => job.threads + EXTRA_IN_FLIGHT,
+    };
     let world = Arc::new(World::new(job.sequence.scene.clone()));
     let (tx, rx) = mpsc::channel::<(u64, Result<Done, String>)>();
     let mut pending = job.tasks.iter().copied();
@@ -110,7 +115,9 @@ pub fn run(mut job: Job, progress: &mut Progress) -> Result<Outcome, String> {
     };
     let mut in_flight = 0;
     loop {
-        while d.stop.is_none() && in_flight < window {
+        // Frames rendered but held for the stream's order count too: a slow frame must not
+        // let the others run ahead without bound.
+        while d.stop.is_none() && in_flight + d.held_for_order() < window {
             if interrupted() {
                 d.stop = Some(Ok(Outcome::Interrupted { written: 0 }));
                 break;
@@ -153,6 +160,10 @@ pub fn run(mut job: Job, progress: &mut Progress) -> Result<Outcome, String> {
 }
 
 impl Delivery<'_> {
+    fn held_for_order(&self) -> usize {
+        self.stream.as_ref().map_or(0, |r| r.held.len())
+    }
+
     /// Claims frame `n` when cooperating; false if another process holds it.
     fn claim(&mut self, n: u64) -> bool {
         let (Some(claims), Some(files)) = (&self.job.claims, &self.job.files) else {

@@ -321,3 +321,65 @@ fn oiiotool_reads_exr_with_depth_and_no_nan() {
     let (_, _, b) = read_png(&tmp.join("p/f_0000.png"));
     assert!(a.iter().zip(&b).all(|(x, y)| x.abs_diff(*y) <= 1));
 }
+
+/// Peak resident memory (VmHWM) of a raw stream of `frames` frames read by a reader that
+/// sleeps between frames.
+fn peak_kb_with_slow_reader(frames: u64) -> u64 {
+    use std::io::Read;
+    let spec = format!("0-{}", frames - 1);
+    let mut child = bin()
+        .args([
+            "render",
+            &orbit(),
+            "--size",
+            "640x360",
+            "--pipe",
+            "raw",
+            "-q",
+            "--frames",
+            &spec,
+        ])
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = child.id();
+    let mut out = child.stdout.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut buf = vec![0u8; 640 * 360 * 3];
+        let mut n = 0;
+        while out.read_exact(&mut buf).is_ok() {
+            n += 1;
+            std::thread::sleep(std::time::Duration::from_millis(15));
+        }
+        n
+    });
+    let mut peak = 0;
+    while let Ok(status) = std::fs::read_to_string(format!("/proc/{pid}/status")) {
+        if let Some(kb) = status.lines().find_map(|l| l.strip_prefix("VmHWM:")) {
+            peak = peak.max(
+                kb.trim()
+                    .trim_end_matches(" kB")
+                    .trim()
+                    .parse()
+                    .unwrap_or(0),
+            );
+        }
+        if child.try_wait().unwrap().is_some() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    assert_eq!(reader.join().unwrap(), frames);
+    peak
+}
+
+#[test]
+fn a_slow_reader_does_not_grow_memory() {
+    let (short, long) = (peak_kb_with_slow_reader(12), peak_kb_with_slow_reader(72));
+    // 640x360 frames: 2.7 MB as floats, 0.7 MB as rgb24.
+    assert!(long < 40_000, "peak {long} kB");
+    assert!(
+        long * 10 < short * 11 + 4_000,
+        "peak grew from {short} kB to {long} kB"
+    );
+}
