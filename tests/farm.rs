@@ -12,14 +12,7 @@ fn seq() -> String {
 }
 
 fn setup(name: &str) -> std::path::PathBuf {
-    let tmp = scratch(name);
-    std::fs::write(tmp.join("seq.yaml"), seq()).unwrap();
-    let out = run_in(
-        &tmp,
-        &["render", "seq.yaml", "-o", "clean/f_####.png", "-q"],
-    );
-    assert!(out.status.success(), "{}", stderr(&out));
-    tmp
+    with_clean_render(name, &seq())
 }
 
 fn spawn(dir: &Path, args: &[&str]) -> Child {
@@ -33,13 +26,7 @@ fn spawn(dir: &Path, args: &[&str]) -> Child {
 }
 
 fn assert_complete_and_identical(dir: &Path) {
-    let (a, b) = (files(&dir.join("clean")), files(&dir.join("out")));
-    assert_eq!(a, b, "frames or leftovers differ");
-    for f in a {
-        let same = std::fs::read(dir.join("clean").join(&f)).unwrap()
-            == std::fs::read(dir.join("out").join(&f)).unwrap();
-        assert!(same, "{f} differs from the single-process render");
-    }
+    assert_same_files(&dir.join("clean"), &dir.join("out"));
     let status = run_in(dir, &["status", "seq.yaml", "-o", "out/f_####.png"]);
     assert_eq!(
         status.status.code(),
@@ -159,15 +146,7 @@ fn claiming_processes_survive_one_being_killed() {
     for f in &leftovers {
         std::fs::remove_file(tmp.join("out").join(f)).unwrap();
     }
-    let (a, b) = (files(&tmp.join("clean")), files(&tmp.join("out")));
-    assert_eq!(a, b);
-    for f in a {
-        assert!(
-            std::fs::read(tmp.join("clean").join(&f)).unwrap()
-                == std::fs::read(tmp.join("out").join(&f)).unwrap(),
-            "{f}"
-        );
-    }
+    assert_same_files(&tmp.join("clean"), &tmp.join("out"));
 }
 
 #[test]

@@ -51,14 +51,7 @@ impl Drop for Tmpfs {
 }
 
 fn setup(name: &str) -> std::path::PathBuf {
-    let tmp = scratch(name);
-    std::fs::write(tmp.join("seq.yaml"), seq()).unwrap();
-    let out = run_in(
-        &tmp,
-        &["render", "seq.yaml", "-o", "clean/f_####.png", "-q"],
-    );
-    assert!(out.status.success(), "{}", stderr(&out));
-    tmp
+    with_clean_render(name, &seq())
 }
 
 /// Every file in `out` is a clean frame, byte for byte, and none is a temporary.

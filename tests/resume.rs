@@ -33,19 +33,10 @@ fn render(dir: &Path, args: &[&str]) -> String {
     stderr(&out)
 }
 
-fn assert_same_files(a: &Path, b: &Path) {
-    let (fa, fb) = (files(a), files(b));
-    assert_eq!(fa, fb);
-    for f in fa {
-        let same = std::fs::read(a.join(&f)).unwrap() == std::fs::read(b.join(&f)).unwrap();
-        assert!(same, "{f} differs from the clean render");
-    }
-}
-
 #[test]
 fn killed_at_any_moment_resumes_to_the_identical_sequence() {
     let tmp = setup("kill");
-    render(&tmp, &["-o", "clean/f_####.png", "--size", "320x180", "-q"]);
+    render(&tmp, &["-o", "clean/f_####.png", "--size", "640x360", "-q"]);
     let mut cut_short = 0;
     for (i, delay_ms) in [30u64, 60, 90, 120, 150, 200, 260, 330, 420, 520, 40, 75]
         .iter()
@@ -58,7 +49,7 @@ fn killed_at_any_moment_resumes_to_the_identical_sequence() {
                 "-o",
                 "out/f_####.png",
                 "--size",
-                "320x180",
+                "640x360",
                 "-q",
                 "--threads",
                 if i % 2 == 0 { "2" } else { "1" },
@@ -86,7 +77,7 @@ fn killed_at_any_moment_resumes_to_the_identical_sequence() {
         }
     }
     assert!(cut_short >= 6, "only {cut_short} kills landed mid-run");
-    render(&tmp, &["-o", "out/f_####.png", "--size", "320x180", "-q"]);
+    render(&tmp, &["-o", "out/f_####.png", "--size", "640x360", "-q"]);
     assert_same_files(&tmp.join("clean"), &tmp.join("out"));
 }
 

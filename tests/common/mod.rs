@@ -107,3 +107,31 @@ pub fn orbit(fps: u32, duration: f64) -> String {
         "timeline:\n  fps: {fps}\n  orbit: {{ center: [-0.1, 0, -0.6], radius: 1.6, height: 0.35, duration: {duration}, look_at: [-0.1, -0.1, -0.6] }}\n"
     )
 }
+
+/// A scratch directory holding `seq.yaml` and, under `clean/`, its single-process render: the
+/// reference the farm, fault and resume tests compare against.
+pub fn with_clean_render(name: &str, yaml: &str) -> PathBuf {
+    let tmp = scratch(name);
+    std::fs::write(tmp.join("seq.yaml"), yaml).unwrap();
+    let out = run_in(
+        &tmp,
+        &["render", "seq.yaml", "-o", "clean/f_####.png", "-q"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    tmp
+}
+
+/// The two directories hold the same file names with the same bytes.
+pub fn assert_same_files(a: &Path, b: &Path) {
+    let (fa, fb) = (files(a), files(b));
+    assert_eq!(fa, fb, "file lists differ");
+    for f in fa {
+        let same = std::fs::read(a.join(&f)).unwrap() == std::fs::read(b.join(&f)).unwrap();
+        assert!(
+            same,
+            "{f} differs between {} and {}",
+            a.display(),
+            b.display()
+        );
+    }
+}
