@@ -82,7 +82,12 @@ fn render_only(
 }
 
 /// Renders frames 0..frames one after the other on `threads` threads, keeping nothing.
-fn render_frames(world: &World, seq: &Sequence, frames: u64, threads: usize) -> Result<f64, String> {
+fn render_frames(
+    world: &World,
+    seq: &Sequence,
+    frames: u64,
+    threads: usize,
+) -> Result<f64, String> {
     let pool = pool(threads)?;
     let start = Instant::now();
     for n in 0..frames {

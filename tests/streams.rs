@@ -369,6 +369,7 @@ fn peak_kb_with_slow_reader(frames: u64) -> u64 {
         }
         std::thread::sleep(std::time::Duration::from_millis(10));
     }
+    assert!(child.wait().unwrap().success());
     assert_eq!(reader.join().unwrap(), frames);
     peak
 }

@@ -10,10 +10,14 @@
 //! collections through libyaml's own indentation stack. Every level counts twice, since one
 //! may hold a second collection that opens without a bracket or indentation of its own: a
 //! sequence sharing its mapping's column (`key:` then `- item`), or a single-pair mapping in a
-//! flow sequence (`[a: [b: 1]]`). The bound is thus at most twice the real depth. The `fuzz/`
-//! target `nesting` checks it against the depth serde_yaml reaches.
+//! flow sequence (`[a: [b: 1]]`), and a flow collection counts one more in case it is the key
+//! of a block mapping (`[a]: b`). The bound is thus at most twice the real depth plus one. The `fuzz/`
+//! target `nesting` checks it against the depth serde_yaml reaches. (libyaml's parser can nest
+//! deeper than its scanner: after `?` in a flow sequence it drops the next `]`, so `[?],[?],…`
+//! leaves sequences open. That costs memory per event like any other dense YAML, not time,
+//! and serde_yaml's recursion limit stops it.)
 
-/// An upper bound on the nesting depth of `text` (at most twice the real depth), and the
+/// An upper bound on the nesting depth of `text` (at most twice the real depth plus one), and the
 /// 1-based line and column where it is first reached; (0, 1, 1) for a text with no collections.
 pub fn nesting_depth(text: &str) -> (usize, usize, usize) {
     let mut s = Scanner::new(text, usize::MAX);
@@ -125,7 +129,9 @@ impl<'a> Scanner<'a> {
     }
 
     fn depth(&self) -> usize {
-        2 * (self.indents.len() + self.flow)
+        // Inside a flow collection one more: it may turn out to be the key of a block mapping
+        // (`[a: 1]: x`), which libyaml opens before it once the `:` is found.
+        2 * (self.indents.len() + self.flow) + usize::from(self.flow > 0)
     }
 
     fn note_depth(&mut self, line: usize, col: usize) {
@@ -461,10 +467,10 @@ mod tests {
     #[test]
     fn counts_flow_and_block_levels() {
         assert_eq!(depth(""), 0);
-        assert_eq!(depth("a: 1\nb: [1, [2, {c: 3}]]\n"), 2 * (1 + 3));
-        assert_eq!(depth("a:\n  b:\n    - [1]\n"), 2 * (3 + 1));
+        assert_eq!(depth("a: 1\nb: [1, [2, {c: 3}]]\n"), 2 * (1 + 3) + 1);
+        assert_eq!(depth("a:\n  b:\n    - [1]\n"), 2 * (3 + 1) + 1);
         assert_eq!(depth("- - - x\n"), 2 * 3);
-        assert_eq!(depth(&"[".repeat(1000)), 2 * 1000);
+        assert_eq!(depth(&"[".repeat(1000)), 2 * 1000 + 1);
     }
 
     #[test]
@@ -472,21 +478,30 @@ mod tests {
         assert_eq!(depth("a: '[[[[' # [[[[\nb: \"[[\\\"[[\"\n"), 2);
         assert_eq!(depth("a: x[[[[\nb: |\n  [[[[\n   [[[\nc: !<a[[[> 1\n"), 2);
         assert_eq!(depth("a: 'it''s [[['\n"), 2);
-        assert_eq!(depth("a: [!, 1]\n"), 2 * 2);
+        assert_eq!(depth("a: [!, 1]\n"), 2 * 2 + 1);
     }
 
     #[test]
     fn plain_scalars_run_on_over_indented_lines() {
         // ` 'x` continues the plain scalar `it`, so the quote opens nothing and the flow
         // sequence on the next line counts.
-        assert_eq!(depth("a: it\n 'x\nb: [[[ ']]]' ]]]\n"), 2 * (1 + 3));
+        assert_eq!(depth("a: it\n 'x\nb: [[[ ']]]' ]]]\n"), 2 * (1 + 3) + 1);
+    }
+
+    #[test]
+    fn collections_without_brackets_stay_within_the_bound() {
+        // Found by the fuzzer. seq, map, seq, map, seq, map: six levels from three brackets.
+        assert!(depth("[a: [b: [c: 1]]]") >= 6);
+        assert!(depth("x: [? a : [b: 1]]") > 4);
+        // A block mapping whose key is a flow sequence holding a pair: three levels.
+        assert!(depth(" [a: 1]: b") >= 3);
     }
 
     #[test]
     fn reports_where_the_limit_is_passed() {
         let text = format!("render:\n  width: {}\n", "[".repeat(100));
-        // Two block levels, then the 31st `[` passes 64.
-        assert_eq!(first_too_deep(&text, 64), Some((2, 10 + 30)));
+        // Two block levels, then the 30th `[` passes 64.
+        assert_eq!(first_too_deep(&text, 64), Some((2, 10 + 29)));
         assert_eq!(first_too_deep("a: [[1]]\n", 64), None);
     }
 }

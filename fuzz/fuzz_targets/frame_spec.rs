@@ -1,0 +1,19 @@
+//! `--frames SPEC`: parsing any string, then expanding it against a few frame counts, must
+//! never panic, hang or allocate without bound.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use rayreel::cli::parse_frame_spec;
+
+fuzz_target!(|data: &[u8]| {
+    let Ok(s) = std::str::from_utf8(data) else {
+        return;
+    };
+    if let Ok(spec) = parse_frame_spec(s) {
+        // `frames` collects ranges in a bitset over the timeline, so repeated ranges cost no
+        // memory beyond the frame count (once 80 MB a range: `4-8888885,4-8888885,2`).
+        for n in [0, 1, 1000, 10_000_000] {
+            let _ = spec.frames(n);
+        }
+    }
+});
