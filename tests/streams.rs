@@ -98,40 +98,23 @@ lights:
     }
 }
 
+/// Renders frame 0 of orbit.yaml at 64x36 to `pattern` with `extra` flags, quietly.
+fn frame_zero(dir: &std::path::Path, pattern: &str, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "render", "ORBIT", "--size", "64x36", "--frames", "0", "-o", pattern, "-q",
+    ];
+    args.extend(extra);
+    let orbit = orbit();
+    args[1] = &orbit;
+    run_in(dir, &args)
+}
+
 #[test]
 fn sixteen_bit_png_holds_the_finer_values() {
     let tmp = scratch("png16");
-    let out = run_in(
-        &tmp,
-        &[
-            "render",
-            &orbit(),
-            "--size",
-            "64x36",
-            "--frames",
-            "0",
-            "-o",
-            "a/f_####.png",
-            "-q",
-        ],
-    );
+    let out = frame_zero(&tmp, "a/f_####.png", &[]);
     assert!(out.status.success());
-    let out = run_in(
-        &tmp,
-        &[
-            "render",
-            &orbit(),
-            "--size",
-            "64x36",
-            "--frames",
-            "0",
-            "-o",
-            "b/f_####.png",
-            "--bit-depth",
-            "16",
-            "-q",
-        ],
-    );
+    let out = frame_zero(&tmp, "b/f_####.png", &["--bit-depth", "16"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let img8 = image::open(tmp.join("a/f_0000.png")).unwrap().to_rgb8();
     let img16 = image::open(tmp.join("b/f_0000.png")).unwrap();
@@ -264,36 +247,9 @@ fn oiiotool_reads_exr_with_depth_and_no_nan() {
         return;
     }
     let tmp = scratch("oiio");
-    let out = run_in(
-        &tmp,
-        &[
-            "render",
-            &orbit(),
-            "--size",
-            "64x36",
-            "--frames",
-            "0",
-            "-o",
-            "e/f_####.exr",
-            "--depth",
-            "-q",
-        ],
-    );
+    let out = frame_zero(&tmp, "e/f_####.exr", &["--depth"]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let out = run_in(
-        &tmp,
-        &[
-            "render",
-            &orbit(),
-            "--size",
-            "64x36",
-            "--frames",
-            "0",
-            "-o",
-            "p/f_####.png",
-            "-q",
-        ],
-    );
+    let out = frame_zero(&tmp, "p/f_####.png", &[]);
     assert!(out.status.success());
     let stats = sh(&tmp, "oiiotool --stats e/f_0000.exr");
     let text = String::from_utf8_lossy(&stats.stdout);
