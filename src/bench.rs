@@ -91,8 +91,7 @@ fn render_frames(
     let pool = pool(threads)?;
     let start = Instant::now();
     for n in 0..frames {
-        let camera = Camera::new(&seq.timeline.pose_of(n)).map_err(|e| e.to_string())?;
-        pool.install(|| tracer::render(world, &camera, &seq.settings, n));
+        pool.install(|| schedule::render_with(world, seq, n, &seq.settings))?;
     }
     Ok(start.elapsed().as_secs_f64())
 }

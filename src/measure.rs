@@ -3,10 +3,10 @@
 //! (uniform samples, adaptive thresholds, max_depth, the presets), each timed as the median of
 //! several runs and compared with the reference on the 8-bit image the user would get.
 
-use crate::camera::Camera;
 use crate::frame::Frame;
+use crate::schedule::render_with;
 use crate::sequence::{Quality, Sequence, preset};
-use crate::tracer::{self, Adaptive, Sampler, Settings};
+use crate::tracer::{Adaptive, Sampler, Settings, World};
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -68,15 +68,10 @@ pub struct Row {
     pub error: Error,
 }
 
-/// Renders frame `n` with `settings` in place of the sequence's.
+/// Renders frame `n` with `settings` in place of the sequence's (building the geometry; the
+/// measurement itself builds it once for all its renders).
 pub fn render(seq: &Sequence, n: u64, settings: &Settings) -> Result<Frame, String> {
-    let camera = Camera::new(&seq.timeline.pose_of(n)).map_err(|e| format!("frame {n}: {e}"))?;
-    Ok(tracer::render(
-        &tracer::World::new(seq.scene.clone()),
-        &camera,
-        settings,
-        n,
-    ))
+    render_with(&World::new(seq.scene.clone()), seq, n, settings)
 }
 
 pub fn reference_settings(base: &Settings) -> Settings {
@@ -138,6 +133,7 @@ pub fn ladder(base: &Settings) -> Vec<(&'static str, String, Settings, bool)> {
 
 /// Times `runs` renders; returns the 8-bit image of the last, samples per pixel and times.
 fn timed(
+    world: &World,
     seq: &Sequence,
     n: u64,
     s: &Settings,
@@ -153,7 +149,7 @@ fn timed(
             settings.height = s.height.div_ceil(2);
         }
         let start = Instant::now();
-        let frame = render(seq, n, &settings)?;
+        let frame = render_with(world, seq, n, &settings)?;
         times.push(start.elapsed().as_secs_f64());
         last = Some(frame);
     }
@@ -199,9 +195,10 @@ pub fn measure(
     runs: usize,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Report, String> {
+    let world = World::new(seq.scene.clone());
     let reference = reference_settings(&seq.settings);
     let start = Instant::now();
-    let ref_image = render(seq, n, &reference)?.to_rgb8();
+    let ref_image = render_with(&world, seq, n, &reference)?.to_rgb8();
     let reference_seconds = start.elapsed().as_secs_f64();
     progress(&format!(
         "reference: {REFERENCE_SAMPLES} spp, max_depth {REFERENCE_DEPTH}, {reference_seconds:.2} s"
@@ -210,10 +207,10 @@ pub fn measure(
         samples: REFERENCE_SAMPLES / 2,
         ..reference
     };
-    let convergence = compare(&render(seq, n, &half)?.to_rgb8(), &ref_image);
+    let convergence = compare(&render_with(&world, seq, n, &half)?.to_rgb8(), &ref_image);
     let mut rows = Vec::new();
     for (group, label, settings, half) in ladder(&seq.settings) {
-        let (image, spp, times) = timed(seq, n, &settings, half, runs)?;
+        let (image, spp, times) = timed(&world, seq, n, &settings, half, runs)?;
         let error = compare(&image, &ref_image);
         progress(&format!("{label}: rmse {:.3}", error.rmse));
         rows.push(Row {

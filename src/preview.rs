@@ -17,9 +17,10 @@
 
 use crate::camera::{Camera, Pose};
 use crate::scene::{Light, Material, Shape};
-use crate::schedule::render_frame;
+use crate::schedule::render_with;
 use crate::sequence::Sequence;
 use crate::timeline::{Path as TimelinePath, Timeline};
+use crate::tracer::World;
 use glam::DVec3;
 use image::{Rgb, RgbImage};
 use std::path::Path;
@@ -175,9 +176,10 @@ pub fn contact_sheet(
         small.settings.max_depth,
     );
     let mut origins = Vec::with_capacity(frames.len());
+    let world = World::new(small.scene.clone());
     for (k, &n) in frames.iter().enumerate() {
         let (x, y) = layout.origin(k);
-        let pixels = render_frame(&small, n)?.to_rgb8();
+        let pixels = render_with(&world, &small, n, &small.settings)?.to_rgb8();
         paste(&mut img, &pixels, (x, y), (tile_w, tile_h));
         tile_label(&mut img, seq, n, (x, y + tile_h), tile_w);
         origins.push((n, x, y));

@@ -12,7 +12,7 @@ use crate::output::{
 };
 use crate::progress::Progress;
 use crate::sequence::Sequence;
-use crate::tracer::{self, World};
+use crate::tracer::{self, Settings, World};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -259,13 +259,19 @@ impl Delivery<'_> {
 
 /// Renders frame `n` of the sequence (building its geometry; a run builds it once).
 pub fn render_frame(seq: &Sequence, n: u64) -> Result<Frame, String> {
-    render_in(&World::new(seq.scene.clone()), seq, n)
+    render_with(&World::new(seq.scene.clone()), seq, n, &seq.settings)
 }
 
-fn render_in(world: &World, seq: &Sequence, n: u64) -> Result<Frame, String> {
+/// Renders frame `n` in `world` (built once from the sequence's scene) with `settings`.
+pub fn render_with(
+    world: &World,
+    seq: &Sequence,
+    n: u64,
+    settings: &Settings,
+) -> Result<Frame, String> {
     let pose = seq.timeline.pose_of(n);
     let camera = Camera::new(&pose).map_err(|e| format!("frame {n}: {e}"))?;
-    Ok(tracer::render(world, &camera, &seq.settings, n))
+    Ok(tracer::render(world, &camera, settings, n))
 }
 
 /// A worker's whole job for one frame: render, then encode for each sink that wants it.
@@ -278,7 +284,7 @@ fn produce(
 ) -> Result<Done, String> {
     let start = Instant::now();
     let n = task.frame;
-    let frame = render_in(world, seq, n)?;
+    let frame = render_with(world, seq, n, &seq.settings)?;
     let file = match files.filter(|_| task.write_file) {
         Some((files, run_hash)) => {
             let meta = frame_meta(seq, n, run_hash);
