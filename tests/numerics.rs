@@ -16,7 +16,7 @@ use rayreel::frame::Frame;
 use rayreel::scene::{Light, Object, Shape};
 use rayreel::schedule::render_frame;
 use rayreel::sequence::{self, Overrides, Sequence};
-use rayreel::timeline::Path as TimelinePath;
+use rayreel::timeline::{Keyed, Path as TimelinePath};
 use rayreel::tracer::intersect::{Ray, intersect, nearest};
 use rayreel::tracer::shade::trace;
 use std::path::{Path, PathBuf};
@@ -268,11 +268,14 @@ fn transform(seq: &mut Sequence, s: f64, offset: DVec3) {
         }
     }
     match &mut seq.timeline.path {
-        TimelinePath::Keys { keys, .. } => {
-            for k in keys {
+        TimelinePath::Keys(keyed) => {
+            // The tracks are built from the keys, so moved keys make a new move.
+            let mut keys = keyed.keys.clone();
+            for k in &mut keys {
                 k.pose.position = map(k.pose.position);
                 k.pose.look_at = map(k.pose.look_at);
             }
+            **keyed = Keyed::new(keys, keyed.interpolation, keyed.speed);
         }
         TimelinePath::Orbit(o) => {
             o.center = map(o.center);
@@ -1118,7 +1121,8 @@ timeline:
 "
         );
         let seq = parse(&yaml);
-        assert_eq!(seq.timeline.frame_count, 4_000_016);
+        // Frames 0 to 4 000 016: the film ends on the last key.
+        assert_eq!(seq.timeline.frame_count, 4_000_017);
         let at = |t: f64| seq.timeline.camera_at(t);
         assert_eq!(at(1e6).position.x, 0.0);
         assert_eq!(at(1e6 + 2.0).position.x, 2.0);

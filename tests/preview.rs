@@ -96,8 +96,9 @@ fn contact_sheet_tiles_are_draft_renders_of_evenly_spaced_frames() {
     );
     assert_eq!((tile_w, tile_h), (256, 144), "960x540 has a 16:9 tile");
     let frames = preview::evenly_spaced(seq.timeline.frame_count, 12);
+    // flyby.yaml ends on its last key: frames 0-144.
     let want: Vec<u64> = (0..12)
-        .map(|k| (k as f64 * 143.0 / 11.0).round() as u64)
+        .map(|k| (k as f64 * 144.0 / 11.0).round() as u64)
         .collect();
     assert_eq!(frames, want);
     let layout = SheetLayout::new(12, tile_w, tile_h);

@@ -103,7 +103,7 @@ fn damaged_files_are_rerendered_and_foreign_ones_kept() {
     let log = stderr(&result);
     assert_eq!(result.status.code(), Some(1), "{log}");
     assert!(
-        log.contains("48 frames: 44 up to date, 3 corrupt, 1 foreign → rendering 3"),
+        log.contains("49 frames: 45 up to date, 3 corrupt, 1 foreign → rendering 3"),
         "{log}"
     );
     assert!(
@@ -130,24 +130,24 @@ fn editing_a_keyframe_rerenders_exactly_the_frames_it_moves() {
     render(&tmp, &["-q"]);
     let again = render(&tmp, &[]);
     assert!(
-        again.contains("48 frames: 48 up to date → rendering 0"),
+        again.contains("49 frames: 49 up to date → rendering 0"),
         "{again}"
     );
-    // Move the last key: with linear interpolation only frames 25-47 (t in (2, 4)) change;
-    // frame 24 sits exactly on the middle key.
+    // Move the last key: with linear interpolation only frames 25-48 (t in (2, 4]) change;
+    // frame 24 sits exactly on the middle key, frame 48 on the last.
     let edited = seq().replace("position: [0, 0.5, -2.5]", "position: [0.2, 0.5, -2.5]");
     std::fs::write(tmp.join("seq.yaml"), edited).unwrap();
     let dry = run_in(&tmp, &["render", "seq.yaml", "--dry-run"]);
     let plan = String::from_utf8_lossy(&dry.stdout);
     assert!(
-        plan.contains("48 frames: 25 up to date, 23 stale → rendering 23"),
+        plan.contains("49 frames: 25 up to date, 24 stale → rendering 24"),
         "{plan}"
     );
-    assert!(plan.contains("would render: 25-47"), "{plan}");
+    assert!(plan.contains("would render: 25-48"), "{plan}");
     let log = render(&tmp, &[]);
-    assert!(log.contains("frame 25/48 written"), "{log}");
+    assert!(log.contains("frame 25/49 written"), "{log}");
     assert!(
-        !log.contains("frame 24/48 written") && !log.contains("frame 3/48 written"),
+        !log.contains("frame 24/49 written") && !log.contains("frame 3/49 written"),
         "{log}"
     );
     // A different resolution re-renders everything.
@@ -155,7 +155,7 @@ fn editing_a_keyframe_rerenders_exactly_the_frames_it_moves() {
         &tmp,
         &["render", "seq.yaml", "--size", "80x45", "--dry-run"],
     );
-    assert!(String::from_utf8_lossy(&dry.stdout).contains("48 frames: 48 stale → rendering 48"));
+    assert!(String::from_utf8_lossy(&dry.stdout).contains("49 frames: 49 stale → rendering 49"));
 }
 
 #[test]
@@ -189,7 +189,7 @@ fn ctrl_c_stops_cleanly_with_exit_130_and_the_rerun_finishes() {
     );
     let written = files(&tmp.join("out"));
     assert!(
-        written.len() < 48,
+        written.len() < 49,
         "the interrupt came too late to test anything"
     );
     assert!(

@@ -7,7 +7,7 @@ use crate::cli::{BenchArgs, CheckArgs, Cli, Command, MeasureArgs, PreviewArgs};
 use crate::output;
 use crate::scene::{Light, Shape};
 use crate::sequence::{self, Overrides, Sequence};
-use crate::timeline::Path as TimelinePath;
+use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
 use std::path::Path;
 
 pub fn run(cli: Cli) -> Result<(), Error> {
@@ -46,7 +46,7 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
     std::fs::create_dir_all(&dir)
         .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
     let (plot, warnings) = preview::path_plot(&seq);
-    for w in &warnings {
+    for w in seq.warnings.iter().chain(&warnings) {
         eprintln!("warning: {w}");
     }
     let plot_file = dir.join(format!("{}_path.png", seq.name));
@@ -62,6 +62,9 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
 
 fn check(args: CheckArgs) -> Result<(), Error> {
     let seq = sequence::load(&args.file, &Overrides::default())?;
+    for w in &seq.warnings {
+        eprintln!("warning: {w}");
+    }
     print!("{}", summary(&args.file.display().to_string(), &seq));
     Ok(())
 }
@@ -93,20 +96,17 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
     let t = &seq.timeline;
     let camera = match &t.path {
         TimelinePath::Orbit(o) => format!("orbit of radius {} ({} turns)", o.radius, o.turns),
-        TimelinePath::Keys { keys, .. } if keys.len() == 1 => "still camera".to_string(),
-        TimelinePath::Keys {
-            keys,
-            interpolation,
-        } => format!(
+        TimelinePath::Keys(k) if k.keys.len() == 1 => "still camera".to_string(),
+        TimelinePath::Keys(k) => format!(
             "{} keyframes, {:?} interpolation",
-            keys.len(),
-            interpolation
+            k.keys.len(),
+            k.interpolation
         )
         .to_lowercase(),
     };
     let s = &seq.settings;
     format!(
-        "{file}: ok\n  objects:    {} ({spheres} spheres, {planes} planes)\n  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  frames:     {} at {} fps ({:.2} s), {camera}\n  output:     {}\n",
+        "{file}: ok\n  objects:    {} ({spheres} spheres, {planes} planes)\n  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  frames:     {} at {} fps ({:.2} s), {camera}\n{}  output:     {}\n",
         scene.objects.len(),
         scene.materials.len(),
         scene.lights.len(),
@@ -121,8 +121,50 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
         t.frame_count,
         t.fps,
         t.frame_count as f64 / t.fps,
+        timing(t),
         seq.output
     )
+}
+
+/// The `timing:` line of a keyframed move: stops, or what constant speed does to key times.
+fn timing(t: &Timeline) -> String {
+    let TimelinePath::Keys(k) = &t.path else {
+        return String::new();
+    };
+    let inner = 1..k.keys.len().saturating_sub(1);
+    let line = match k.speed {
+        Speed::Constant => {
+            let passed: Vec<String> = inner
+                .clone()
+                .map(|i| format!("{i} at {:.3} s", k.passes[i]))
+                .collect();
+            let rate = t.speed_at(k.passes[0]);
+            let ignored = match passed.is_empty() {
+                true => String::new(),
+                false => format!(
+                    "; the times of keyframes between the first and last are ignored: passed {}",
+                    passed.join(", ")
+                ),
+            };
+            format!("constant speed, {rate:.4} units/s{ignored}")
+        }
+        Speed::Keys if k.keys.len() < 2 => return String::new(),
+        Speed::Keys => {
+            let stops: Vec<String> = (0..k.keys.len())
+                .filter(|&i| k.keys[i].ease == Ease::Stop)
+                .map(|i| i.to_string())
+                .collect();
+            match stops.is_empty() {
+                true => "each keyframe at its time".to_string(),
+                false => format!(
+                    "each keyframe at its time, stopping at keyframe{} {}",
+                    if stops.len() == 1 { "" } else { "s" },
+                    stops.join(", ")
+                ),
+            }
+        }
+    };
+    format!("  timing:     {line}\n")
 }
 
 fn measure(args: MeasureArgs) -> Result<(), Error> {

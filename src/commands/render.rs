@@ -98,6 +98,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         .as_ref()
         .map(|f| plan::plan(&seq, &frames, f, args.force));
     if args.dry_run {
+        seq.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
         print_dry_run(plan.as_ref(), &frames);
         return Ok(());
     }
@@ -111,6 +112,9 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         ProgressFormat::Json if !args.quiet => Progress::json(tasks.len() as u64, count),
         _ => Progress::new(tasks.len() as u64, count, args.quiet),
     };
+    for w in &seq.warnings {
+        progress.warn(&format!("warning: {w}"));
+    }
     if let (Some(plan), Some(files)) = (&plan, &files) {
         progress.note(&plan.summary());
         report_skipped(&progress, plan, files);

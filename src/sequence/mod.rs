@@ -8,13 +8,14 @@
 mod guard;
 mod locate;
 pub mod raw;
+mod timeline;
 
 pub use guard::nesting_depth;
 
 use crate::camera::{Camera, Degenerate, Pose};
 use crate::output::pattern::Pattern;
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
-use crate::timeline::{Ease, Interpolation, Key, Orbit, Path as TimelinePath, Timeline};
+use crate::timeline::Timeline;
 use crate::tracer::{Adaptive, Sampler, Settings};
 use glam::DVec3;
 pub use raw::Quality;
@@ -65,6 +66,8 @@ pub struct Sequence {
     pub output: String,
     /// The file's `render.quality`, if any (draft also halves the resolution).
     pub quality: Option<Quality>,
+    /// What is valid but probably not meant (keys after the end of the film), one line each.
+    pub warnings: Vec<String>,
 }
 
 /// Values given on the command line; they replace the file's.
@@ -115,6 +118,20 @@ fn invalid<T>(path: impl Into<String>, message: impl Into<String>) -> Check<T> {
 }
 
 pub fn load(file: &Path, overrides: &Overrides) -> Result<Sequence, LoadError> {
+    parse(file, &read(file)?, overrides)
+}
+
+/// `load`, except that a file whose every field is valid but whose camera cannot be built at
+/// some key or frame still loads: that error comes back beside the sequence, for `preview` to
+/// draw the path it describes.
+pub fn load_drawable(
+    file: &Path,
+    overrides: &Overrides,
+) -> Result<(Sequence, Option<LoadError>), LoadError> {
+    parse_drawable(file, &read(file)?, overrides)
+}
+
+fn read(file: &Path) -> Result<String, LoadError> {
     use std::io::Read;
     let io = |source| LoadError::Io {
         file: file.to_owned(),
@@ -143,7 +160,7 @@ pub fn load(file: &Path, overrides: &Overrides) -> Result<Sequence, LoadError> {
             "stream did not contain valid UTF-8",
         ))
     })?;
-    parse(file, &text, overrides)
+    Ok(text)
 }
 
 fn too_large(file: &Path, len: u64) -> LoadError {
@@ -158,6 +175,18 @@ fn too_large(file: &Path, len: u64) -> LoadError {
 
 /// `load` for text already in memory; `file` is only used to name things.
 pub fn parse(file: &Path, text: &str, overrides: &Overrides) -> Result<Sequence, LoadError> {
+    match parse_drawable(file, text, overrides)? {
+        (_, Some(problem)) => Err(problem),
+        (seq, None) => Ok(seq),
+    }
+}
+
+/// `load_drawable` for text already in memory.
+pub fn parse_drawable(
+    file: &Path,
+    text: &str,
+    overrides: &Overrides,
+) -> Result<(Sequence, Option<LoadError>), LoadError> {
     if text.len() as u64 > MAX_FILE_BYTES {
         return Err(too_large(file, text.len() as u64));
     }
@@ -176,7 +205,7 @@ pub fn parse(file: &Path, text: &str, overrides: &Overrides) -> Result<Sequence,
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "sequence".into());
-    let mut seq = validate(raw, &name).map_err(|e| {
+    let located = |e: Invalid| {
         let (line, col) = locate::locate(text, &e.path);
         let message = clip(format!("{}: {}", e.path, e.message));
         LoadError::Invalid {
@@ -185,9 +214,10 @@ pub fn parse(file: &Path, text: &str, overrides: &Overrides) -> Result<Sequence,
             col,
             message,
         }
-    })?;
+    };
+    let (mut seq, problem) = validate(raw, &name).map_err(located)?;
     apply(&mut seq, overrides)?;
-    Ok(seq)
+    Ok((seq, problem.map(located)))
 }
 
 fn yaml_error(file: &Path, e: &serde_yaml::Error) -> LoadError {
@@ -357,7 +387,8 @@ fn max_depth(v: u64) -> Result<u32, String> {
     }
 }
 
-fn validate(raw: raw::Sequence, name: &str) -> Check<Sequence> {
+/// The sequence, and the first key or frame whose camera cannot be built (see `load_drawable`).
+fn validate(raw: raw::Sequence, name: &str) -> Check<(Sequence, Option<Invalid>)> {
     let settings = render_settings(&raw.render)?;
     let background = color(
         "render.background",
@@ -386,12 +417,17 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<Sequence> {
         lights.push(light(&format!("lights[{i}]"), l)?);
     }
     let camera = raw.camera.as_ref().map(camera_pose).transpose()?;
-    let timeline = match (&raw.timeline, camera) {
-        (Some(t), camera) => timeline(t, camera)?,
-        (None, Some(pose)) => Timeline::still(pose),
+    let loaded = match (&raw.timeline, camera) {
+        (Some(t), camera) => timeline::timeline(t, camera)?,
+        (None, Some(pose)) => timeline::Loaded {
+            timeline: Timeline::still(pose),
+            warnings: Vec::new(),
+            problem: None,
+        },
         (None, None) => return invalid("camera", "a sequence needs a `camera:` or a `timeline:`"),
     };
-    Ok(Sequence {
+    let timeline = loaded.timeline;
+    let seq = Sequence {
         name: name.to_string(),
         scene: Scene {
             objects,
@@ -410,7 +446,9 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<Sequence> {
         },
         quality: raw.render.quality,
         timeline,
-    })
+        warnings: loaded.warnings,
+    };
+    Ok((seq, loaded.problem))
 }
 
 fn render_settings(r: &raw::Render) -> Check<Settings> {
@@ -554,6 +592,12 @@ fn fmt3(v: raw::V3) -> String {
 }
 
 fn unit(path: &str, v: raw::V3) -> Check<DVec3> {
+    direction(path, v).map(|d| d.normalize())
+}
+
+/// A vector that has a direction, kept as written: a camera's `up` is used exactly as printed
+/// by `rayreel camera`, so a still camera given those numbers renders the same frame.
+fn direction(path: &str, v: raw::V3) -> Check<DVec3> {
     let d = vector(path, v)?;
     let n = d.normalize_or_zero();
     if n == DVec3::ZERO || !n.is_finite() {
@@ -562,7 +606,7 @@ fn unit(path: &str, v: raw::V3) -> Check<DVec3> {
             format!("must have a non-zero length {}", got(fmt3(v))),
         );
     }
-    Ok(n)
+    Ok(d)
 }
 
 fn color(path: &str, v: raw::V3) -> Check<DVec3> {
@@ -806,7 +850,7 @@ fn camera_pose(c: &raw::Camera) -> Check<Pose> {
     let pose = Pose {
         position: vector("camera.position", c.position)?,
         look_at: vector("camera.look_at", c.look_at)?,
-        up: unit("camera.up", c.up.unwrap_or([0.0, 1.0, 0.0]))?,
+        up: direction("camera.up", c.up.unwrap_or([0.0, 1.0, 0.0]))?,
         fov: fov("camera.fov", c.fov.unwrap_or(90.0))?,
     };
     check_pose("camera", &pose)?;
@@ -829,199 +873,4 @@ fn check_pose(path: &str, pose: &Pose) -> Check<()> {
             ),
         )
     })
-}
-
-fn timeline(t: &raw::Timeline, camera: Option<Pose>) -> Check<Timeline> {
-    let fps = in_range(
-        "timeline.fps",
-        t.fps.unwrap_or(24.0),
-        0.0,
-        MAX_FPS,
-        "in (0, 1000]",
-    )?;
-    if fps == 0.0 {
-        return invalid(
-            "timeline.fps",
-            format!("must be greater than 0 {}", got(fps)),
-        );
-    }
-    let (path, natural) = match (&t.keyframes, &t.orbit) {
-        (Some(_), Some(_)) => {
-            return invalid(
-                "timeline.orbit",
-                "give either `keyframes:` or `orbit:`, not both",
-            );
-        }
-        (None, None) => return invalid("timeline", "needs `keyframes:` or `orbit:`"),
-        (Some(keys), None) => {
-            let keys = keyframes(keys, camera)?;
-            let last = keys.last().expect("non-empty").time;
-            let interpolation = match t.interpolation.unwrap_or(raw::Interpolation::Smooth) {
-                raw::Interpolation::Linear => Interpolation::Linear,
-                raw::Interpolation::Smooth => Interpolation::Smooth,
-            };
-            (
-                TimelinePath::Keys {
-                    keys,
-                    interpolation,
-                },
-                last,
-            )
-        }
-        (None, Some(o)) => {
-            let o = orbit(o, camera)?;
-            (TimelinePath::Orbit(o), o.duration)
-        }
-    };
-    let duration = match t.duration {
-        Some(d) => positive("timeline.duration", d)?,
-        None if natural > 0.0 => natural,
-        None => 1.0 / fps,
-    };
-    let frames = (duration * fps).round();
-    if frames < 1.0 || frames > MAX_FRAMES as f64 {
-        return invalid(
-            "timeline.duration",
-            format!(
-                "duration × fps must give 1 to {MAX_FRAMES} frames {}",
-                got(format!("{duration} s × {fps} fps = {frames} frames"))
-            ),
-        );
-    }
-    let timeline = Timeline {
-        fps,
-        frame_count: frames as u64,
-        path,
-    };
-    check_every_frame(&timeline)?;
-    Ok(timeline)
-}
-
-fn keyframes(keys: &[raw::Keyframe], camera: Option<Pose>) -> Check<Vec<Key>> {
-    if keys.is_empty() {
-        return invalid("timeline.keyframes", "needs at least one keyframe");
-    }
-    let mut out: Vec<Key> = Vec::with_capacity(keys.len());
-    for (i, k) in keys.iter().enumerate() {
-        let path = format!("timeline.keyframes[{i}]");
-        let time = number(&format!("{path}.time"), k.time)?;
-        if let Some(prev) = out.last()
-            && time <= prev.time
-        {
-            return invalid(
-                format!("{path}.time"),
-                format!(
-                    "keyframe times must increase strictly; keyframe {} is at {} {}",
-                    i - 1,
-                    prev.time,
-                    got(time)
-                ),
-            );
-        }
-        let before = out.last().map(|k| k.pose).or(camera);
-        let field = |name: &str, v: Option<raw::V3>, carried: Option<DVec3>| -> Check<DVec3> {
-            match (v, carried) {
-                (Some(v), _) if name == "up" => unit(&format!("{path}.{name}"), v),
-                (Some(v), _) => vector(&format!("{path}.{name}"), v),
-                (None, Some(c)) => Ok(c),
-                (None, None) => invalid(
-                    path.clone(),
-                    format!("the first keyframe needs `{name}` (or give a `camera:` section)"),
-                ),
-            }
-        };
-        let pose = Pose {
-            position: field("position", k.position, before.map(|p| p.position))?,
-            look_at: field("look_at", k.look_at, before.map(|p| p.look_at))?,
-            up: field("up", k.up, Some(before.map_or(DVec3::Y, |p| p.up)))?,
-            fov: match k.fov {
-                Some(f) => fov(&format!("{path}.fov"), f)?,
-                None => before.map_or(90.0, |p| p.fov),
-            },
-        };
-        check_pose(&path, &pose)?;
-        let ease = match k.ease.unwrap_or(raw::Ease::Linear) {
-            raw::Ease::Linear => Ease::Linear,
-            raw::Ease::In => Ease::In,
-            raw::Ease::Out => Ease::Out,
-            raw::Ease::InOut => Ease::InOut,
-        };
-        out.push(Key { time, pose, ease });
-    }
-    Ok(out)
-}
-
-fn orbit(o: &raw::Orbit, camera: Option<Pose>) -> Check<Orbit> {
-    let p = "timeline.orbit";
-    let center = vector(&format!("{p}.center"), o.center)?;
-    Ok(Orbit {
-        center,
-        radius: positive(&format!("{p}.radius"), o.radius)?,
-        height: number(&format!("{p}.height"), o.height)?,
-        start_angle: number(&format!("{p}.start_angle"), o.start_angle)?,
-        turns: number(&format!("{p}.turns"), o.turns.unwrap_or(1.0))?,
-        duration: positive(&format!("{p}.duration"), o.duration)?,
-        look_at: match o.look_at {
-            Some(v) => vector(&format!("{p}.look_at"), v)?,
-            None => center,
-        },
-        up: match o.up {
-            Some(v) => unit(&format!("{p}.up"), v)?,
-            None => camera.map_or(DVec3::Y, |c| c.up),
-        },
-        fov: match o.fov {
-            Some(f) => fov(&format!("{p}.fov"), f)?,
-            None => camera.map_or(90.0, |c| c.fov),
-        },
-    })
-}
-
-/// Interpolation can pass where no key is (a look-at flipping through up, a fov overshooting),
-/// so every frame's camera is built once here rather than failing mid-render.
-fn check_every_frame(t: &Timeline) -> Check<()> {
-    // Beyond this many frames the check would dominate loading; paths are smooth, so a dense
-    // sample (every frame up to the limit, then evenly spaced) still finds any bad stretch.
-    const FULL_CHECK: u64 = 1_000_000;
-    let step = t.frame_count.div_ceil(FULL_CHECK).max(1);
-    let mut previous_right: Option<DVec3> = None;
-    for n in (0..t.frame_count).step_by(step as usize) {
-        let pose = t.pose_of(n);
-        // A view that swings through or close by `up` between two frames flips the picture
-        // over even though no sampled frame is degenerate: the right vector whips round.
-        let camera = Camera::new(&pose).and_then(|c| match previous_right {
-            Some(r) if r.dot(c.right) < libm::cos(MAX_ROLL_PER_FRAME_DEGREES.to_radians()) => {
-                Err(Degenerate::Flip)
-            }
-            _ => Ok(c),
-        });
-        if let Ok(c) = &camera {
-            previous_right = Some(c.right);
-        }
-        if let Err(e) = camera {
-            let (path, between) = match &t.path {
-                TimelinePath::Orbit(_) => ("timeline.orbit".to_string(), String::new()),
-                TimelinePath::Keys { keys, .. } => {
-                    let time = t.time_of(n);
-                    let k = keys.partition_point(|k| k.time <= time).saturating_sub(1);
-                    let next = (k + 1).min(keys.len() - 1);
-                    (
-                        format!("timeline.keyframes[{k}]"),
-                        format!(" between keyframes {k} and {next}"),
-                    )
-                }
-            };
-            return invalid(
-                path,
-                format!(
-                    "frame {n} (t = {} s){between}: {e} (position {}, look_at {}, up {}, fov {})",
-                    t.time_of(n),
-                    pose.position,
-                    pose.look_at,
-                    pose.up,
-                    pose.fov
-                ),
-            );
-        }
-    }
-    Ok(())
 }

@@ -220,6 +220,7 @@ pub struct Timeline {
     pub fps: Option<f64>,
     pub duration: Option<f64>,
     pub interpolation: Option<Interpolation>,
+    pub speed: Option<Speed>,
     pub keyframes: Option<Vec<Keyframe>>,
     pub orbit: Option<Orbit>,
 }
@@ -232,12 +233,10 @@ pub enum Interpolation {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Ease {
-    Linear,
-    In,
-    Out,
-    InOut,
+#[serde(rename_all = "lowercase")]
+pub enum Speed {
+    Keys,
+    Constant,
 }
 
 #[derive(Debug, Deserialize)]
@@ -248,7 +247,9 @@ pub struct Keyframe {
     pub look_at: Option<V3>,
     pub up: Option<V3>,
     pub fov: Option<f64>,
-    pub ease: Option<Ease>,
+    /// A string rather than an enum, so that the eases of earlier versions get a message
+    /// saying what replaces them.
+    pub ease: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -287,7 +287,8 @@ impl Plot {
 fn keys_and_targets(t: &Timeline) -> (Vec<(DVec3, DVec3)>, Vec<DVec3>) {
     match &t.path {
         TimelinePath::Orbit(o) => (Vec::new(), vec![o.look_at]),
-        TimelinePath::Keys { keys, .. } => {
+        TimelinePath::Keys(keyed) => {
+            let keys = &keyed.keys;
             let mut targets: Vec<DVec3> = Vec::new();
             for k in keys {
                 if !targets.contains(&k.pose.look_at) {
@@ -636,11 +637,10 @@ fn title(img: &mut RgbImage, seq: &Sequence) {
     let t = &seq.timeline;
     let motion = match &t.path {
         TimelinePath::Orbit(o) => format!("orbit of radius {}", fmt_num(o.radius)),
-        TimelinePath::Keys { keys, .. } if keys.len() == 1 => "still camera".into(),
-        TimelinePath::Keys {
-            keys,
-            interpolation,
-        } => format!("{} keyframes, {interpolation:?}", keys.len()).to_lowercase(),
+        TimelinePath::Keys(k) if k.keys.len() == 1 => "still camera".into(),
+        TimelinePath::Keys(k) => {
+            format!("{} keyframes, {:?}", k.keys.len(), k.interpolation).to_lowercase()
+        }
     };
     let frames = match t.frame_count {
         1 => "1 frame".to_string(),

@@ -1,0 +1,353 @@
+//! `timeline:` → `Timeline`: keyframes or an orbit, the frame count, the warnings a valid
+//! timeline can still deserve, and the check of every frame's camera.
+
+use super::{
+    Check, Invalid, MAX_FPS, MAX_FRAMES, MAX_ROLL_PER_FRAME_DEGREES, fov, got, in_range, invalid,
+    number, positive, raw, unit, vector,
+};
+use crate::camera::{Camera, Degenerate, Pose};
+use crate::timeline::{
+    Ease, Interpolation, Key, Keyed, Orbit, Path as TimelinePath, Speed, Timeline, frames_to,
+};
+use glam::DVec3;
+
+/// A timeline that loaded, with what is worth a warning and, separately, the first problem
+/// that makes some frame's camera impossible (a file that `preview` can still draw).
+pub(super) struct Loaded {
+    pub timeline: Timeline,
+    pub warnings: Vec<String>,
+    pub problem: Option<Invalid>,
+}
+
+pub(super) fn timeline(t: &raw::Timeline, camera: Option<Pose>) -> Check<Loaded> {
+    let fps = in_range(
+        "timeline.fps",
+        t.fps.unwrap_or(24.0),
+        0.0,
+        MAX_FPS,
+        "in (0, 1000]",
+    )?;
+    if fps == 0.0 {
+        return invalid(
+            "timeline.fps",
+            format!("must be greater than 0 {}", got(fps)),
+        );
+    }
+    let (path, natural) = match (&t.keyframes, &t.orbit) {
+        (Some(_), Some(_)) => {
+            return invalid(
+                "timeline.orbit",
+                "give either `keyframes:` or `orbit:`, not both",
+            );
+        }
+        (None, None) => return invalid("timeline", "needs `keyframes:` or `orbit:`"),
+        (Some(keys), None) => {
+            let keyed = keyed(t, keyframes(keys, camera)?)?;
+            let last = keyed.keys.last().expect("non-empty").time;
+            (TimelinePath::Keys(Box::new(keyed)), frames_to(last, fps))
+        }
+        (None, Some(o)) => {
+            if t.speed.is_some() {
+                return invalid(
+                    "timeline.speed",
+                    "an orbit always moves at constant speed; `speed` is for keyframes",
+                );
+            }
+            let o = orbit(o, camera)?;
+            (TimelinePath::Orbit(o), (o.duration * fps).round())
+        }
+    };
+    let frames = match t.duration {
+        Some(d) => (positive("timeline.duration", d)? * fps).round(),
+        None => natural,
+    };
+    if !(1.0..=MAX_FRAMES as f64).contains(&frames) {
+        let how = match (t.duration, &path) {
+            (Some(d), _) => format!("{d} s × {fps} fps = {frames} frames"),
+            (None, TimelinePath::Keys(k)) => format!(
+                "ending on the last keyframe at {} s at {fps} fps takes {frames} frames",
+                k.keys.last().expect("non-empty").time
+            ),
+            (None, TimelinePath::Orbit(o)) => {
+                format!("{} s × {fps} fps = {frames} frames", o.duration)
+            }
+        };
+        return invalid(
+            "timeline.duration",
+            format!(
+                "duration × fps must give 1 to {MAX_FRAMES} frames {}",
+                got(how)
+            ),
+        );
+    }
+    let timeline = Timeline {
+        fps,
+        frame_count: frames as u64,
+        path,
+    };
+    let warnings = t
+        .duration
+        .map_or_else(Vec::new, |d| unseen_keys(&timeline, d));
+    let problem = check_keys(&timeline)
+        .and_then(|()| check_every_frame(&timeline))
+        .err();
+    Ok(Loaded {
+        timeline,
+        warnings,
+        problem,
+    })
+}
+
+/// The keys with the file's interpolation and speed, after the checks constant speed needs.
+fn keyed(t: &raw::Timeline, keys: Vec<Key>) -> Check<Keyed> {
+    let interpolation = match t.interpolation.unwrap_or(raw::Interpolation::Smooth) {
+        raw::Interpolation::Linear => Interpolation::Linear,
+        raw::Interpolation::Smooth => Interpolation::Smooth,
+    };
+    let speed = match t.speed.unwrap_or(raw::Speed::Keys) {
+        raw::Speed::Keys => Speed::Keys,
+        raw::Speed::Constant => Speed::Constant,
+    };
+    if speed == Speed::Constant {
+        constant_speed_keys(&keys)?;
+    }
+    Ok(Keyed::new(keys, interpolation, speed))
+}
+
+/// Constant speed times keys by distance, so each must move the camera and none may stop.
+fn constant_speed_keys(keys: &[Key]) -> Check<()> {
+    if keys.len() < 2 {
+        return invalid(
+            "timeline.speed",
+            "`speed: constant` needs at least two keyframes",
+        );
+    }
+    for (i, k) in keys.iter().enumerate() {
+        if k.ease == Ease::Stop {
+            return invalid(
+                format!("timeline.keyframes[{i}].ease"),
+                "a camera at constant speed never stops; remove `ease: stop` or `speed: constant`",
+            );
+        }
+        if i > 0 && k.pose.position == keys[i - 1].pose.position {
+            return invalid(
+                format!("timeline.keyframes[{i}]"),
+                format!(
+                    "with `speed: constant` keys are passed in order of distance, so each needs its own position; keyframe {i} is where keyframe {} is (got {})",
+                    i - 1,
+                    k.pose.position
+                ),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// With an explicit duration, keys after the last frame are never seen.
+fn unseen_keys(t: &Timeline, duration: f64) -> Vec<String> {
+    let TimelinePath::Keys(k) = &t.path else {
+        return Vec::new();
+    };
+    let last_frame = t.frame_count - 1;
+    let end = t.time_of(last_frame);
+    let late: Vec<usize> = (0..k.keys.len())
+        .filter(|&i| k.passes[i] > end + 1e-6 / t.fps)
+        .collect();
+    if late.is_empty() {
+        return Vec::new();
+    }
+    let names: Vec<String> = late.iter().map(|i| i.to_string()).collect();
+    let times: Vec<String> = late.iter().map(|&i| k.passes[i].to_string()).collect();
+    let (noun, verb) = if late.len() == 1 {
+        ("keyframe", "is")
+    } else {
+        ("keyframes", "are")
+    };
+    vec![format!(
+        "timeline.duration: {duration} s at {} fps ends with frame {last_frame} (t = {end} s), so {noun} {} (t = {} s) {verb} never shown; remove `duration` to end on the last keyframe",
+        t.fps,
+        names.join(", "),
+        times.join(", ")
+    )]
+}
+
+fn keyframes(keys: &[raw::Keyframe], camera: Option<Pose>) -> Check<Vec<Key>> {
+    if keys.is_empty() {
+        return invalid("timeline.keyframes", "needs at least one keyframe");
+    }
+    let mut out: Vec<Key> = Vec::with_capacity(keys.len());
+    for (i, k) in keys.iter().enumerate() {
+        let path = format!("timeline.keyframes[{i}]");
+        let time = number(&format!("{path}.time"), k.time)?;
+        if let Some(prev) = out.last()
+            && time <= prev.time
+        {
+            return invalid(
+                format!("{path}.time"),
+                format!(
+                    "keyframe times must increase strictly; keyframe {} is at {} {}",
+                    i - 1,
+                    prev.time,
+                    got(time)
+                ),
+            );
+        }
+        let before = out.last().map(|k| k.pose).or(camera);
+        let pose = key_pose(&path, k, before)?;
+        let ease = ease(&path, i, keys.len(), k.ease.as_deref())?;
+        out.push(Key { time, pose, ease });
+    }
+    Ok(out)
+}
+
+/// A key's pose: given values, else the previous key's, else `camera:`'s. Ups are unit vectors
+/// so that they interpolate by direction.
+fn key_pose(path: &str, k: &raw::Keyframe, before: Option<Pose>) -> Check<Pose> {
+    let field = |name: &str, v: Option<raw::V3>, carried: Option<DVec3>| -> Check<DVec3> {
+        match (v, carried) {
+            (Some(v), _) => vector(&format!("{path}.{name}"), v),
+            (None, Some(c)) => Ok(c),
+            (None, None) => invalid(
+                path,
+                format!("the first keyframe needs `{name}` (or give a `camera:` section)"),
+            ),
+        }
+    };
+    let up = match k.up {
+        Some(v) => unit(&format!("{path}.up"), v)?,
+        None => before.map_or(DVec3::Y, |p| p.up).normalize(),
+    };
+    Ok(Pose {
+        position: field("position", k.position, before.map(|p| p.position))?,
+        look_at: field("look_at", k.look_at, before.map(|p| p.look_at))?,
+        up,
+        fov: match k.fov {
+            Some(f) => fov(&format!("{path}.fov"), f)?,
+            None => before.map_or(90.0, |p| p.fov),
+        },
+    })
+}
+
+/// `stop` or `pass`; the per-segment eases of earlier versions are refused with what to write.
+fn ease(path: &str, i: usize, count: usize, value: Option<&str>) -> Check<Ease> {
+    let next = |what: &str| match i + 1 < count {
+        true => format!("{what} and on keyframe {}", i + 1),
+        false => what.to_string(),
+    };
+    let instead = match value {
+        None | Some("pass") => return Ok(Ease::Pass),
+        Some("stop") => return Ok(Ease::Stop),
+        Some("linear") => "every key is passed through smoothly by default, so remove it".into(),
+        Some("in") => "for the same slow start write `ease: stop` here".into(),
+        Some("out") if i + 1 < count => format!(
+            "for the same slow arrival remove it and write `ease: stop` on keyframe {}",
+            i + 1
+        ),
+        Some("out") => "it never did anything on the last keyframe, so remove it".into(),
+        Some("in-out") => format!("for the same slow-down write `ease: stop` {}", next("here")),
+        Some(other) => {
+            return invalid(
+                format!("{path}.ease"),
+                format!("unknown ease `{other}` (expected `stop` or `pass`)"),
+            );
+        }
+    };
+    let old = value.unwrap_or_default();
+    invalid(
+        format!("{path}.ease"),
+        format!(
+            "`{old}` is no longer an ease: ease now says how the camera meets this key (`stop` or `pass`, the default) and speed stays smooth through keys; {instead}"
+        ),
+    )
+}
+
+fn orbit(o: &raw::Orbit, camera: Option<Pose>) -> Check<Orbit> {
+    let p = "timeline.orbit";
+    let center = vector(&format!("{p}.center"), o.center)?;
+    Ok(Orbit {
+        center,
+        radius: positive(&format!("{p}.radius"), o.radius)?,
+        height: number(&format!("{p}.height"), o.height)?,
+        start_angle: number(&format!("{p}.start_angle"), o.start_angle)?,
+        turns: number(&format!("{p}.turns"), o.turns.unwrap_or(1.0))?,
+        duration: positive(&format!("{p}.duration"), o.duration)?,
+        look_at: match o.look_at {
+            Some(v) => vector(&format!("{p}.look_at"), v)?,
+            None => center,
+        },
+        up: match o.up {
+            Some(v) => super::direction(&format!("{p}.up"), v)?,
+            None => camera.map_or(DVec3::Y, |c| c.up),
+        },
+        fov: match o.fov {
+            Some(f) => fov(&format!("{p}.fov"), f)?,
+            None => camera.map_or(90.0, |c| c.fov),
+        },
+    })
+}
+
+/// Every key must make a camera, whatever the frames show.
+fn check_keys(t: &Timeline) -> Check<()> {
+    let TimelinePath::Keys(k) = &t.path else {
+        return Ok(());
+    };
+    for (i, key) in k.keys.iter().enumerate() {
+        super::check_pose(&format!("timeline.keyframes[{i}]"), &key.pose)?;
+    }
+    Ok(())
+}
+
+/// Interpolation can pass where no key is (a look-at flipping through up, a fov overshooting),
+/// so every frame's camera is built once here rather than failing mid-render.
+fn check_every_frame(t: &Timeline) -> Check<()> {
+    // Beyond this many frames the check would dominate loading; paths are smooth, so a dense
+    // sample (every frame up to the limit, then evenly spaced) still finds any bad stretch.
+    const FULL_CHECK: u64 = 1_000_000;
+    let step = t.frame_count.div_ceil(FULL_CHECK).max(1);
+    let mut previous_right: Option<DVec3> = None;
+    for n in (0..t.frame_count).step_by(step as usize) {
+        let pose = t.pose_of(n);
+        // A view that swings through or close by `up` between two frames flips the picture
+        // over even though no sampled frame is degenerate: the right vector whips round.
+        let camera = Camera::new(&pose).and_then(|c| match previous_right {
+            Some(r) if r.dot(c.right) < libm::cos(MAX_ROLL_PER_FRAME_DEGREES.to_radians()) => {
+                Err(Degenerate::Flip)
+            }
+            _ => Ok(c),
+        });
+        match camera {
+            Ok(c) => previous_right = Some(c.right),
+            Err(e) => return frame_problem(t, n, &pose, e),
+        }
+    }
+    Ok(())
+}
+
+fn frame_problem(t: &Timeline, n: u64, pose: &Pose, e: Degenerate) -> Check<()> {
+    let (path, between) = match &t.path {
+        TimelinePath::Orbit(_) => ("timeline.orbit".to_string(), String::new()),
+        TimelinePath::Keys(keyed) => {
+            let time = t.time_of(n);
+            let k = keyed
+                .passes
+                .partition_point(|&p| p <= time)
+                .saturating_sub(1);
+            let next = (k + 1).min(keyed.keys.len() - 1);
+            (
+                format!("timeline.keyframes[{k}]"),
+                format!(" between keyframes {k} and {next}"),
+            )
+        }
+    };
+    invalid(
+        path,
+        format!(
+            "frame {n} (t = {} s){between}: {e} (position {}, look_at {}, up {}, fov {})",
+            t.time_of(n),
+            pose.position,
+            pose.look_at,
+            pose.up,
+            pose.fov
+        ),
+    )
+}

@@ -1,0 +1,238 @@
+//! Keyframes → `camera_at(t)`. Frame n shows t = n / fps, computed in f64 from the integer n.
+//!
+//! ```yaml
+//! timeline:
+//!   fps: 24                  # default 24
+//!   duration: 4.0            # optional; frames = round(duration * fps); default: end on the last key
+//!   interpolation: smooth    # linear | smooth (centripetal Catmull-Rom through every key)
+//!   speed: keys              # keys (reach each key at its time) | constant (along the whole path)
+//!   keyframes:
+//!     - { time: 0.0, position: [0, 0.3, 1.5], look_at: [0, 0, -0.5] }
+//!     - { time: 2.0, position: [1.5, 0.5, -0.5], fov: 70, ease: stop }
+//!   # or, instead of keyframes:
+//!   orbit: { center: [0, 0, -1], radius: 1.6, height: 0.35, start_angle: 0, turns: 1, duration: 6 }
+//! ```
+//! Position, look-at, up and fov are separate tracks; each key holds all four (absent values
+//! carry over from the previous key). Every track has a shape through its key values (`shape`)
+//! and a timing along it (`timing`), so its speed is continuous through the keys. A key's
+//! `ease: stop` halts every track there.
+
+mod shape;
+mod timing;
+mod track;
+
+use crate::camera::Pose;
+use glam::DVec3;
+use track::{Timing, Track};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Interpolation {
+    Linear,
+    Smooth,
+}
+
+/// How the camera meets a key.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Ease {
+    /// Passes through at whatever speed the timing gives (the default).
+    Pass,
+    /// Speed 0 there: arrives and leaves smoothly.
+    Stop,
+}
+
+/// What times the camera's progress along its path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Speed {
+    /// Each key is reached at its own time.
+    Keys,
+    /// One speed from the first key to the last; the keys between only shape the path.
+    Constant,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Key {
+    pub time: f64,
+    pub pose: Pose,
+    pub ease: Ease,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Orbit {
+    pub center: DVec3,
+    pub radius: f64,
+    pub height: f64,
+    /// Degrees; 0 puts the camera on the +z side of the centre, 90 on the +x side.
+    pub start_angle: f64,
+    pub turns: f64,
+    pub duration: f64,
+    pub look_at: DVec3,
+    pub up: DVec3,
+    pub fov: f64,
+}
+
+/// A keyframed move with its tracks built once, so `camera_at` only evaluates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Keyed {
+    /// Sorted strictly by time; one key is a still camera.
+    pub keys: Vec<Key>,
+    pub interpolation: Interpolation,
+    pub speed: Speed,
+    /// When the camera is at each key: its time, or under constant speed the time it gets there.
+    pub passes: Vec<f64>,
+    /// Position, look_at, up, fov (as x).
+    tracks: [Track; 4],
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum Path {
+    Keys(Box<Keyed>),
+    Orbit(Orbit),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Timeline {
+    pub fps: f64,
+    pub frame_count: u64,
+    pub path: Path,
+}
+
+/// A key may end this much of a frame after the frame that shows it (rounding in t × fps).
+const FRAME_SLACK: f64 = 1e-6;
+
+/// Frames of a keyframed timeline that ends on its last key: 0 … ceil(t_last·fps − 1e-6),
+/// which is round(t_last·fps) when the key falls on a frame.
+pub fn frames_to(t_last: f64, fps: f64) -> f64 {
+    (t_last * fps - FRAME_SLACK).ceil().max(0.0) + 1.0
+}
+
+impl Keyed {
+    /// Builds the tracks. Under constant speed a path with a zero-length segment cannot be
+    /// timed by distance, so it falls back to the keys' times (the loader rejects it first).
+    pub fn new(keys: Vec<Key>, interpolation: Interpolation, speed: Speed) -> Keyed {
+        let times: Vec<f64> = keys.iter().map(|k| k.time).collect();
+        let stops: Vec<bool> = keys.iter().map(|k| k.ease == Ease::Stop).collect();
+        let curved = interpolation == Interpolation::Smooth;
+        let timing = match interpolation {
+            Interpolation::Linear => Timing::Linear,
+            Interpolation::Smooth => Timing::Smooth,
+        };
+        let values = |get: fn(&Pose) -> DVec3| keys.iter().map(|k| get(&k.pose)).collect();
+        let positions: Vec<DVec3> = values(|p| p.position);
+        let mut position = Track::new(times.clone(), positions.clone(), &stops, curved, timing);
+        let mut passes = times.clone();
+        let moves = position.reach().windows(2).all(|w| w[1] > w[0]);
+        let speed = match (speed, moves && keys.len() > 1) {
+            (Speed::Constant, true) => {
+                position = Track::new(times.clone(), positions, &stops, curved, Timing::Constant);
+                passes = constant_passes(&times, position.reach());
+                Speed::Constant
+            }
+            _ => Speed::Keys,
+        };
+        let track = |values: Vec<DVec3>, curved: bool| {
+            Track::new(passes.clone(), values, &stops, curved, timing)
+        };
+        let tracks = [
+            position,
+            track(values(|p| p.look_at), curved),
+            track(values(|p| p.up), curved),
+            // A number's path is the number line: always straight.
+            track(values(|p| DVec3::new(p.fov, 0.0, 0.0)), false),
+        ];
+        Keyed {
+            keys,
+            interpolation,
+            speed,
+            passes,
+            tracks,
+        }
+    }
+
+    fn at(&self, t: f64) -> Pose {
+        let [position, look_at, up, fov] = &self.tracks;
+        Pose {
+            position: position.at(t).0,
+            look_at: look_at.at(t).0,
+            up: up.at(t).0,
+            fov: fov.at(t).0.x,
+        }
+    }
+}
+
+/// Under constant speed key k is passed when the camera has covered its share of the path:
+/// τ_k = τ_0 + (τ_last − τ_0)·S_k / S_last.
+fn constant_passes(times: &[f64], reach: &[f64]) -> Vec<f64> {
+    let last = times.len() - 1;
+    let (t0, span, total) = (times[0], times[last] - times[0], reach[last]);
+    let mut out: Vec<f64> = reach.iter().map(|s| t0 + span * (s / total)).collect();
+    out[last] = times[last];
+    out
+}
+
+impl Timeline {
+    /// A single frame of a still camera.
+    pub fn still(pose: Pose) -> Timeline {
+        let key = Key {
+            time: 0.0,
+            pose,
+            ease: Ease::Pass,
+        };
+        Timeline {
+            fps: 24.0,
+            frame_count: 1,
+            path: Path::Keys(Box::new(Keyed::new(
+                vec![key],
+                Interpolation::Linear,
+                Speed::Keys,
+            ))),
+        }
+    }
+
+    /// The time frame `n` shows, exact for any n (no accumulation).
+    pub fn time_of(&self, n: u64) -> f64 {
+        n as f64 / self.fps
+    }
+
+    pub fn pose_of(&self, n: u64) -> Pose {
+        self.camera_at(self.time_of(n))
+    }
+
+    pub fn camera_at(&self, t: f64) -> Pose {
+        match &self.path {
+            Path::Orbit(o) => orbit_at(o, t),
+            Path::Keys(k) => k.at(t),
+        }
+    }
+
+    /// The camera's speed along its path at time t, in scene units per second: at a key time
+    /// the rate of the segment ending there for the last key, starting there otherwise.
+    pub fn speed_at(&self, t: f64) -> f64 {
+        match &self.path {
+            Path::Orbit(o) => {
+                let circle = std::f64::consts::TAU * o.radius * o.turns.abs();
+                circle / o.duration
+            }
+            Path::Keys(k) => k.tracks[0].at(t).1,
+        }
+    }
+}
+
+fn orbit_at(o: &Orbit, t: f64) -> Pose {
+    let turns = o.turns * t / o.duration;
+    // Whole turns are reduced first so the angle stays exact however long the orbit runs.
+    let angle = o.start_angle.to_radians() + std::f64::consts::TAU * turns.fract();
+    let offset = DVec3::new(
+        o.radius * libm::sin(angle),
+        o.height,
+        o.radius * libm::cos(angle),
+    );
+    Pose {
+        position: o.center + offset,
+        look_at: o.look_at,
+        up: o.up,
+        fov: o.fov,
+    }
+}
+
+#[cfg(test)]
+mod tests;
