@@ -20,7 +20,8 @@ Examples:
   rayreel check sequences/flyby.yaml
   rayreel measure sequences/orbit.yaml --frame 0
   rayreel bench
-  rayreel preview sequences/flyby.yaml --out /tmp/preview";
+  rayreel preview sequences/flyby.yaml --out /tmp/preview
+  rayreel camera sequences/flyby.yaml --format json";
 
 #[derive(Debug, Parser)]
 #[command(name = "rayreel", version, about = "Render camera fly-through animations with a Whitted ray tracer", after_help = EXAMPLES)]
@@ -41,6 +42,8 @@ pub enum Command {
     Status(StatusArgs),
     /// Draw the camera path (top and side views) and a contact sheet of draft frames.
     Preview(PreviewArgs),
+    /// Print every frame's camera: time, position, look_at, up, fov, speed and focus distance.
+    Camera(CameraArgs),
     /// Measure what each speed/accuracy setting costs and buys on one frame.
     Measure(MeasureArgs),
     /// Benchmark this machine: rays/s and frames/s, thread scaling, sphere-count scaling,
@@ -58,6 +61,24 @@ pub struct StatusArgs {
 pub struct CheckArgs {
     /// The sequence file (YAML).
     pub file: PathBuf,
+}
+
+#[derive(Debug, Args)]
+pub struct CameraArgs {
+    /// The sequence file (YAML).
+    pub file: PathBuf,
+    /// `csv` (a header line, then one line per frame) or `json` (one object per line).
+    #[arg(long, value_enum, default_value_t = CameraFormat::Csv)]
+    pub format: CameraFormat,
+    /// Frames to print, e.g. 0-23 (default: all).
+    #[arg(long, value_name = "SPEC", value_parser = parse_frame_spec)]
+    pub frames: Option<FrameSpec>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CameraFormat {
+    Csv,
+    Json,
 }
 
 #[derive(Debug, Args)]

@@ -1,5 +1,6 @@
 //! The subcommands: each turns validated arguments into calls down the pipeline.
 
+mod camera;
 mod render;
 
 use crate::Error;
@@ -16,6 +17,7 @@ pub fn run(cli: Cli) -> Result<(), Error> {
         Command::Status(args) => render::status(args),
         Command::Check(args) => check(args),
         Command::Preview(args) => preview(args),
+        Command::Camera(args) => camera::camera(args),
         Command::Measure(args) => measure(args),
         Command::Bench(args) => bench(args),
     }
@@ -60,11 +62,16 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
     Ok(())
 }
 
-fn check(args: CheckArgs) -> Result<(), Error> {
-    let seq = sequence::load(&args.file, &Overrides::default())?;
+/// What a valid sequence still deserves a warning for, on stderr.
+fn print_warnings(seq: &Sequence) {
     for w in &seq.warnings {
         eprintln!("warning: {w}");
     }
+}
+
+fn check(args: CheckArgs) -> Result<(), Error> {
+    let seq = sequence::load(&args.file, &Overrides::default())?;
+    print_warnings(&seq);
     print!("{}", summary(&args.file.display().to_string(), &seq));
     Ok(())
 }
