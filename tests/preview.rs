@@ -27,7 +27,7 @@ fn orbit_traces_a_circle_in_the_top_view() {
     let TimelinePath::Orbit(orbit) = seq.timeline.path.clone() else {
         panic!("orbit.yaml is an orbit");
     };
-    let (img, warnings) = preview::path_plot(&seq);
+    let (img, warnings) = preview::path_plot(&seq, None);
     assert!(warnings.is_empty(), "{warnings:?}");
     let [top, _] = preview::panels(&seq);
     let (cx, cy) = top.to_px(orbit.center);
@@ -78,7 +78,7 @@ fn the_written_path_plot_is_the_drawn_one() {
     let out = run_in(&dir, &["preview", file.to_str().unwrap(), "--out", "p"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let (w, h, bytes) = read_png(&dir.join("p/orbit_path.png"));
-    let (img, _) = preview::path_plot(&load(&file));
+    let (img, _) = preview::path_plot(&load(&file), None);
     assert_eq!((w, h), img.dimensions());
     assert!(bytes == img.into_raw(), "the PNG holds the plot");
 }
@@ -227,4 +227,76 @@ fn flyby_preview_prints_both_paths() {
     }
     let missing = run_in(&dir, &["preview", "nope.yaml"]);
     assert_eq!(missing.status.code(), Some(2), "{}", stderr(&missing));
+}
+
+#[test]
+fn check_and_render_warn_about_the_frames_preview_flags() {
+    let dir = scratch("preview-warnings");
+    std::fs::write(dir.join("through.yaml"), THROUGH_A_SPHERE).unwrap();
+    let inside = "warning: frames 9-11: the camera is inside objects[0] (sphere)";
+    let out = run_in(&dir, &["check", "through.yaml"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains(inside), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("objects[1]"), "{}", stderr(&out));
+    let out = run_in(&dir, &["render", "through.yaml", "--frames", "0", "-q"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains(inside), "{}", stderr(&out));
+    let out = run_in(
+        &dir,
+        &[
+            "render",
+            "through.yaml",
+            "--frames",
+            "0",
+            "--progress",
+            "json",
+        ],
+    );
+    let json = format!("{{\"event\": \"warning\", \"text\": \"{inside}\"}}");
+    assert!(stderr(&out).contains(&json), "{}", stderr(&out));
+}
+
+#[test]
+fn the_speed_panel_plots_the_camera_speed_under_the_views() {
+    let file = repo().join("sequences/flyby.yaml");
+    let seq = load(&file);
+    let (img, _) = preview::path_plot(&seq, None);
+    let [top, _] = preview::panels(&seq);
+    let below = top.y + top.height + 40;
+    let traced = (below..img.height())
+        .flat_map(|y| (0..img.width()).map(move |x| (x, y)))
+        .filter(|&(x, y)| *img.get_pixel(x, y) == preview::PATH)
+        .count();
+    // A curve across most of the width, two pixels thick.
+    assert!(traced > img.width() as usize, "{traced} speed pixels");
+}
+
+#[test]
+fn a_path_that_fails_validation_is_still_drawn_with_the_reason() {
+    let dir = scratch("preview-invalid");
+    let bad = repo().join("tests/fixtures/bad/path_through_up.yaml");
+    std::fs::copy(&bad, dir.join("up.yaml")).unwrap();
+    // Frame 24 looks straight down along up.
+    let out = run_in(
+        &dir,
+        &["preview", "up.yaml", "--out", "p", "--frames", "22-26"],
+    );
+    // Both pictures, then the same error as `check` and exit 2: the file cannot render.
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert_eq!(stdout_lines(&out), vec!["p/up_path.png", "p/up_sheet.png"]);
+    let check = run_in(&dir, &["check", "up.yaml"]);
+    let reason = stderr(&check);
+    assert!(
+        reason.contains("up is parallel to the view direction"),
+        "{reason}"
+    );
+    assert!(stderr(&out).ends_with(&reason), "{}", stderr(&out));
+    let (_, _, path) = read_png(&dir.join("p/up_path.png"));
+    let red = path.chunks(3).filter(|p| *p == preview::BAD.0).count();
+    assert!(red > 500, "{red} red pixels: the bad frames and the reason");
+    let (_, _, sheet) = read_png(&dir.join("p/up_sheet.png"));
+    assert!(
+        sheet.chunks(3).any(|p| p == [90, 20, 20]),
+        "a no-camera tile"
+    );
 }

@@ -23,11 +23,26 @@ pub fn run(cli: Cli) -> Result<(), Error> {
     }
 }
 
+/// What a valid sequence still deserves a warning for: keys the film never shows, frames with
+/// the camera inside an object.
+fn warnings(seq: &Sequence) -> Vec<String> {
+    let mut all = seq.warnings.clone();
+    all.extend(crate::preview::inside_warnings(seq));
+    all
+}
+
+fn print_warnings(seq: &Sequence) {
+    for w in warnings(seq) {
+        eprintln!("warning: {w}");
+    }
+}
+
 /// Writes DIR/NAME_path.png and DIR/NAME_sheet.png, printing their paths; warnings about the
-/// camera path go to stderr.
+/// camera path go to stderr. A path whose camera cannot be built somewhere is still drawn,
+/// with the reason, and then reported as the load error it is (exit 2).
 fn preview(args: PreviewArgs) -> Result<(), Error> {
     use crate::preview;
-    let seq = sequence::load(&args.file, &Overrides::default())?;
+    let (seq, problem) = sequence::load_drawable(&args.file, &Overrides::default())?;
     let count = seq.timeline.frame_count;
     let frames = match &args.frames {
         Some(spec) => spec
@@ -47,7 +62,8 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
         .unwrap_or_else(|| Path::new("frames").join(&seq.name).join("preview"));
     std::fs::create_dir_all(&dir)
         .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
-    let (plot, warnings) = preview::path_plot(&seq);
+    let reason = problem.as_ref().map(|p| p.to_string());
+    let (plot, warnings) = preview::path_plot(&seq, reason.as_deref());
     for w in seq.warnings.iter().chain(&warnings) {
         eprintln!("warning: {w}");
     }
@@ -59,14 +75,7 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
     let sheet_file = dir.join(format!("{}_sheet.png", seq.name));
     preview::write_png(&sheet_file, &sheet).map_err(Error::Failed)?;
     println!("{}", sheet_file.display());
-    Ok(())
-}
-
-/// What a valid sequence still deserves a warning for, on stderr.
-fn print_warnings(seq: &Sequence) {
-    for w in &seq.warnings {
-        eprintln!("warning: {w}");
-    }
+    problem.map_or(Ok(()), |p| Err(Error::Load(p)))
 }
 
 fn check(args: CheckArgs) -> Result<(), Error> {

@@ -82,6 +82,7 @@ fn directory(pattern: &Pattern) -> PathBuf {
 
 pub fn render(args: RenderArgs) -> Result<(), Error> {
     let (seq, frames) = load(&args.job)?;
+    let warnings = super::warnings(&seq);
     // With --pipe the stream is the product; files come too only when asked for explicitly.
     let files = match args.pipe.is_none() || args.job.output.is_some() {
         true => Some(file_sink(&seq, &args.job, !args.dry_run)?),
@@ -98,7 +99,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         .as_ref()
         .map(|f| plan::plan(&seq, &frames, f, args.force));
     if args.dry_run {
-        seq.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
+        warnings.iter().for_each(|w| eprintln!("warning: {w}"));
         print_dry_run(plan.as_ref(), &frames);
         return Ok(());
     }
@@ -112,7 +113,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         ProgressFormat::Json if !args.quiet => Progress::json(tasks.len() as u64, count),
         _ => Progress::new(tasks.len() as u64, count, args.quiet),
     };
-    for w in &seq.warnings {
+    for w in &warnings {
         progress.warn(&format!("warning: {w}"));
     }
     if let (Some(plan), Some(files)) = (&plan, &files) {

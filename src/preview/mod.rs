@@ -15,6 +15,8 @@
 //! Everything is drawn with plain pixel writes and a built-in 5×7 font, so the preview needs
 //! no font or plotting crate and is byte-identical everywhere.
 
+mod speed;
+
 use crate::camera::{Camera, Pose};
 use crate::scene::{Light, Material, Shape};
 use crate::schedule::render_with;
@@ -179,8 +181,11 @@ pub fn contact_sheet(
     let world = World::new(small.scene.clone());
     for (k, &n) in frames.iter().enumerate() {
         let (x, y) = layout.origin(k);
-        let pixels = render_with(&world, &small, n, &small.settings)?.to_rgb8();
-        paste(&mut img, &pixels, (x, y), (tile_w, tile_h));
+        match render_with(&world, &small, n, &small.settings) {
+            Ok(frame) => paste(&mut img, &frame.to_rgb8(), (x, y), (tile_w, tile_h)),
+            // An invalid path (see `sequence::load_drawable`) has frames with no camera.
+            Err(_) => no_camera(&mut img, (x, y), (tile_w, tile_h)),
+        }
         tile_label(&mut img, seq, n, (x, y + tile_h), tile_w);
         origins.push((n, x, y));
     }
@@ -205,6 +210,15 @@ fn paste(img: &mut RgbImage, pixels: &[u8], at: (u32, u32), size: (u32, u32)) {
             img.put_pixel(at.0 + col, at.1 + row, p);
         }
     }
+}
+
+/// A red tile saying that this frame has no camera.
+fn no_camera(img: &mut RgbImage, at: (u32, u32), size: (u32, u32)) {
+    let (x, y) = (i64::from(at.0), i64::from(at.1));
+    let rect = Rect::new(x, y, x + i64::from(size.0), y + i64::from(size.1));
+    let mut c = Canvas::new(img, rect);
+    c.fill(Rgb([90, 20, 20]));
+    c.text(x + 6, y + 6, "no camera", 2, SHEET_TEXT);
 }
 
 /// `12  0.50s` under a tile: the number bright, the time dimmer, clipped to the tile's width.
@@ -316,35 +330,71 @@ fn positioned_lights(seq: &Sequence) -> Vec<(usize, DVec3)> {
 fn problems(seq: &Sequence, samples: &[(u64, Pose)]) -> (Vec<bool>, Vec<String>) {
     let mut bad = vec![false; samples.len()];
     let mut warnings = Vec::new();
-    for (i, o) in seq.scene.objects.iter().enumerate() {
-        let (flags, what): (Vec<bool>, String) = match o.shape {
-            Shape::Sphere { center, radius } => (
-                samples
-                    .iter()
-                    .map(|(_, p)| p.position.distance(center) < radius)
-                    .collect(),
-                format!("the camera is inside objects[{i}] (sphere)"),
-            ),
-            Shape::Plane { point, normal } => (
-                samples
-                    .iter()
-                    .map(|(_, p)| (p.position - point).dot(normal) < 0.0)
-                    .collect(),
-                format!("the camera is behind objects[{i}] (plane), against its normal"),
-            ),
-        };
-        report(&flags, samples, &what, &mut bad, &mut warnings);
+    let positions: Vec<DVec3> = samples.iter().map(|(_, p)| p.position).collect();
+    let frames: Vec<u64> = samples.iter().map(|(n, _)| *n).collect();
+    for (what, flags) in inside_objects(seq, &positions) {
+        report(&flags, &frames, &what, &mut bad, &mut warnings);
     }
     let rolls = roll_flags(samples);
     let what = "the camera cannot be built or rolls over by more than 60° from the previous frame";
-    report(&rolls, samples, what, &mut bad, &mut warnings);
+    report(&rolls, &frames, what, &mut bad, &mut warnings);
     (bad, warnings)
+}
+
+/// Distance tests `inside_warnings` may spend: the frames it samples shrink as objects grow.
+const INSIDE_BUDGET: u64 = 20_000_000;
+
+/// `frames 9-11: the camera is inside objects[0] (sphere)` for every run of frames where the
+/// camera is inside a sphere or behind a plane; `check` and `render` print these. Long
+/// timelines are sampled (every frame up to 100 000, fewer in scenes of many objects).
+pub fn inside_warnings(seq: &Sequence) -> Vec<String> {
+    let t = &seq.timeline;
+    let objects = seq.scene.objects.len().max(1) as u64;
+    let n = (INSIDE_BUDGET / objects).clamp(100, MAX_PATH_SAMPLES);
+    let frames = evenly_spaced(t.frame_count, n);
+    let positions: Vec<DVec3> = frames.iter().map(|&f| t.pose_of(f).position).collect();
+    let mut bad = vec![false; frames.len()];
+    let mut warnings = Vec::new();
+    for (what, flags) in inside_objects(seq, &positions) {
+        report(&flags, &frames, &what, &mut bad, &mut warnings);
+    }
+    warnings
+}
+
+/// Per object the camera enters: what to call it and, per position, whether it is inside.
+fn inside_objects(seq: &Sequence, positions: &[DVec3]) -> Vec<(String, Vec<bool>)> {
+    let mut reach = Bounds::EMPTY;
+    for &p in positions {
+        reach.add(p);
+    }
+    let mut out = Vec::new();
+    for (i, o) in seq.scene.objects.iter().enumerate() {
+        let (inside, what): (&dyn Fn(DVec3) -> bool, &str) = match o.shape {
+            // A sphere whose box misses every position's box cannot hold one.
+            Shape::Sphere { center, radius } if !reach.grown(radius).contains(center) => continue,
+            Shape::Sphere { center, radius } => {
+                (&move |p: DVec3| p.distance(center) < radius, "inside")
+            }
+            Shape::Plane { point, normal } => {
+                (&move |p: DVec3| (p - point).dot(normal) < 0.0, "behind")
+            }
+        };
+        let flags: Vec<bool> = positions.iter().map(|&p| inside(p)).collect();
+        if flags.contains(&true) {
+            let kind = match o.shape {
+                Shape::Sphere { .. } => "(sphere)",
+                Shape::Plane { .. } => "(plane), against its normal",
+            };
+            out.push((format!("the camera is {what} objects[{i}] {kind}"), flags));
+        }
+    }
+    out
 }
 
 /// Turns per-sample flags into one warning per run of consecutive flagged samples.
 fn report(
     flags: &[bool],
-    samples: &[(u64, Pose)],
+    frames: &[u64],
     what: &str,
     bad: &mut [bool],
     warnings: &mut Vec<String>,
@@ -360,7 +410,7 @@ fn report(
             bad[i] = true;
             i += 1;
         }
-        let (a, b) = (samples[start].0, samples[i - 1].0);
+        let (a, b) = (frames[start], frames[i - 1]);
         let frames = if a == b {
             format!("frame {a}")
         } else {
@@ -614,23 +664,62 @@ fn fit_panel(b: &Bounds, axes: (usize, usize, bool), slice: f64, at: (u32, u32))
 // ---------------------------------------------------------------------------------------------
 // The path plot
 
-/// Draws the path plot; returns it with the warnings (without a `warning: ` prefix).
-pub fn path_plot(seq: &Sequence) -> (RgbImage, Vec<String>) {
+/// Draws the path plot and, under it, the speed panel; returns the picture with the warnings
+/// (without a `warning: ` prefix). `invalid` is why the file cannot render, written in red.
+pub fn path_plot(seq: &Sequence, invalid: Option<&str>) -> (RgbImage, Vec<String>) {
     let plot = Plot::new(seq);
     let [top, side] = layout(&plot);
-    let legend_y = top.y + PANEL_H + 16;
-    let shown = plot.warnings.len().min(MAX_WARNING_LINES + 1) as u32;
     let width = (side.x + side.width + MARGIN).max(LEGEND_MIN_W);
-    let height = legend_y + 2 * LEGEND_ROW + 8 + shown * WARNING_ROW + MARGIN;
+    let speed_y = top.y + PANEL_H + CAPTION_H + 16;
+    let speed_rect = Rect::new(
+        i64::from(MARGIN),
+        i64::from(speed_y),
+        i64::from(width - MARGIN),
+        i64::from(speed_y + speed::HEIGHT),
+    );
+    let legend_y = speed_y + speed::HEIGHT + 16;
+    let columns = ((width - 2 * MARGIN) / (ADVANCE as u32 * 2)) as usize;
+    let invalid = invalid.map(|why| format!("invalid: {}", why.replace('`', "'")));
+    let warned = plot.warnings.iter().take(MAX_WARNING_LINES);
+    let notes = invalid
+        .into_iter()
+        .chain(warned.map(|w| format!("warning: {w}")));
+    let mut lines: Vec<String> = notes.flat_map(|n| wrap(&n, columns)).collect();
+    if plot.warnings.len() > MAX_WARNING_LINES {
+        let more = plot.warnings.len() - MAX_WARNING_LINES;
+        lines.push(format!("... and {more} more warnings (on stderr)"));
+    }
+    let notes_y = legend_y + 2 * LEGEND_ROW + 8;
+    let height = notes_y + lines.len() as u32 * WARNING_ROW + MARGIN;
     let mut img = RgbImage::from_pixel(width, height, BACKGROUND);
     title(&mut img, seq);
     for panel in [&top, &side] {
         caption(&mut img, panel);
         draw_panel(&mut img, panel, seq, &plot);
     }
+    let mut c = Canvas::whole(&mut img);
+    let what = "speed along the path (scene units per second) against time; squares: keyframes";
+    c.text(i64::from(MARGIN), speed_rect.y0 - 22, what, 2, INK);
+    let mut c = Canvas::new(&mut img, speed_rect);
+    speed::draw(&mut c, speed_rect, seq, &plot.samples, &plot.bad);
     legend(&mut img, legend_y);
-    warning_lines(&mut img, &plot.warnings, legend_y + 2 * LEGEND_ROW + 8);
+    red_lines(&mut img, &lines, notes_y);
     (img, plot.warnings)
+}
+
+/// Words of `text` in lines of at most `columns` characters (a longer word gets its own line).
+fn wrap(text: &str, columns: usize) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    for word in text.split(' ') {
+        match lines.last_mut() {
+            Some(line) if line.chars().count() + 1 + word.chars().count() <= columns => {
+                line.push(' ');
+                line.push_str(word);
+            }
+            _ => lines.push(word.to_string()),
+        }
+    }
+    lines
 }
 
 fn title(img: &mut RgbImage, seq: &Sequence) {
@@ -932,7 +1021,7 @@ fn legend(img: &mut RgbImage, y: u32) {
     let rows: [&[(&str, Marker)]; 2] = [
         &[
             ("camera path", Marker::Line(PATH)),
-            ("camera inside an object", Marker::Line(BAD)),
+            ("inside an object / no camera", Marker::Line(BAD)),
             ("keyframe", Marker::Key),
             ("start", Marker::Start),
             ("end", Marker::End),
@@ -993,19 +1082,11 @@ impl Marker {
     }
 }
 
-fn warning_lines(img: &mut RgbImage, warnings: &[String], y: u32) {
+fn red_lines(img: &mut RgbImage, lines: &[String], y: u32) {
     let mut c = Canvas::whole(img);
-    let mut y = i64::from(y);
-    for w in warnings.iter().take(MAX_WARNING_LINES) {
-        c.text(i64::from(MARGIN), y, &format!("warning: {w}"), 2, BAD);
-        y += i64::from(WARNING_ROW);
-    }
-    if warnings.len() > MAX_WARNING_LINES {
-        let more = format!(
-            "... and {} more warnings (on stderr)",
-            warnings.len() - MAX_WARNING_LINES
-        );
-        c.text(i64::from(MARGIN), y, &more, 2, BAD);
+    for (i, line) in lines.iter().enumerate() {
+        let y = i64::from(y + i as u32 * WARNING_ROW);
+        c.text(i64::from(MARGIN), y, line, 2, BAD);
     }
 }
 
