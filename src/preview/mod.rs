@@ -878,7 +878,7 @@ fn draw_path(c: &mut Canvas, p: &Panel, plot: &Plot) {
         let (w, colour) = if bad { (4.0, BAD) } else { (2.0, PATH) };
         c.line(pts[i - 1], pts[i], w, colour);
     }
-    // Dots at the frames show speed (ease in, ease out) when they are far enough apart.
+    // Dots at the frames show speed (bunched up near a stop) when they are far enough apart.
     let every = dot_stride(&pts);
     for (i, &pt) in pts.iter().enumerate().step_by(every) {
         let colour = if plot.bad[i] { BAD } else { PATH };
