@@ -33,56 +33,10 @@ pub(super) fn timeline(t: &raw::Timeline, camera: Option<Pose>) -> Check<Loaded>
             format!("must be greater than 0 {}", got(fps)),
         );
     }
-    let (path, natural) = match (&t.keyframes, &t.orbit) {
-        (Some(_), Some(_)) => {
-            return invalid(
-                "timeline.orbit",
-                "give either `keyframes:` or `orbit:`, not both",
-            );
-        }
-        (None, None) => return invalid("timeline", "needs `keyframes:` or `orbit:`"),
-        (Some(keys), None) => {
-            let keyed = keyed(t, keyframes(keys, camera)?)?;
-            let last = keyed.keys.last().expect("non-empty").time;
-            (TimelinePath::Keys(Box::new(keyed)), frames_to(last, fps))
-        }
-        (None, Some(o)) => {
-            if t.speed.is_some() {
-                return invalid(
-                    "timeline.speed",
-                    "an orbit always moves at constant speed; `speed` is for keyframes",
-                );
-            }
-            let o = orbit(o, camera)?;
-            (TimelinePath::Orbit(o), (o.duration * fps).round())
-        }
-    };
-    let frames = match t.duration {
-        Some(d) => (positive("timeline.duration", d)? * fps).round(),
-        None => natural,
-    };
-    if !(1.0..=MAX_FRAMES as f64).contains(&frames) {
-        let how = match (t.duration, &path) {
-            (Some(d), _) => format!("{d} s × {fps} fps = {frames} frames"),
-            (None, TimelinePath::Keys(k)) => format!(
-                "ending on the last keyframe at {} s at {fps} fps takes {frames} frames",
-                k.keys.last().expect("non-empty").time
-            ),
-            (None, TimelinePath::Orbit(o)) => {
-                format!("{} s × {fps} fps = {frames} frames", o.duration)
-            }
-        };
-        return invalid(
-            "timeline.duration",
-            format!(
-                "duration × fps must give 1 to {MAX_FRAMES} frames {}",
-                got(how)
-            ),
-        );
-    }
+    let path = path(t, camera)?;
     let timeline = Timeline {
         fps,
-        frame_count: frames as u64,
+        frame_count: frame_count(t, &path, fps)?,
         path,
     };
     let warnings = t
@@ -96,6 +50,54 @@ pub(super) fn timeline(t: &raw::Timeline, camera: Option<Pose>) -> Check<Loaded>
         warnings,
         problem,
     })
+}
+
+fn path(t: &raw::Timeline, camera: Option<Pose>) -> Check<TimelinePath> {
+    match (&t.keyframes, &t.orbit) {
+        (Some(_), Some(_)) => invalid(
+            "timeline.orbit",
+            "give either `keyframes:` or `orbit:`, not both",
+        ),
+        (None, None) => invalid("timeline", "needs `keyframes:` or `orbit:`"),
+        (Some(keys), None) => Ok(TimelinePath::Keys(Box::new(keyed(
+            t,
+            keyframes(keys, camera)?,
+        )?))),
+        (None, Some(_)) if t.speed.is_some() => invalid(
+            "timeline.speed",
+            "an orbit always moves at constant speed; `speed` is for keyframes",
+        ),
+        (None, Some(o)) => Ok(TimelinePath::Orbit(orbit(o, camera)?)),
+    }
+}
+
+/// round(duration × fps) with a duration (an orbit has its own); otherwise up to the last key.
+fn frame_count(t: &raw::Timeline, path: &TimelinePath, fps: f64) -> Check<u64> {
+    let frames = match (t.duration, path) {
+        (Some(d), _) => (positive("timeline.duration", d)? * fps).round(),
+        (None, TimelinePath::Orbit(o)) => (o.duration * fps).round(),
+        (None, TimelinePath::Keys(k)) => frames_to(k.keys.last().expect("non-empty").time, fps),
+    };
+    if (1.0..=MAX_FRAMES as f64).contains(&frames) {
+        return Ok(frames as u64);
+    }
+    let how = match (t.duration, path) {
+        (Some(d), _) => format!("{d} s × {fps} fps = {frames} frames"),
+        (None, TimelinePath::Keys(k)) => format!(
+            "ending on the last keyframe at {} s at {fps} fps takes {frames} frames",
+            k.keys.last().expect("non-empty").time
+        ),
+        (None, TimelinePath::Orbit(o)) => {
+            format!("{} s × {fps} fps = {frames} frames", o.duration)
+        }
+    };
+    invalid(
+        "timeline.duration",
+        format!(
+            "duration × fps must give 1 to {MAX_FRAMES} frames {}",
+            got(how)
+        ),
+    )
 }
 
 /// The keys with the file's interpolation and speed, after the checks constant speed needs.
