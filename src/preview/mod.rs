@@ -369,23 +369,26 @@ fn inside_objects(seq: &Sequence, positions: &[DVec3]) -> Vec<(String, Vec<bool>
     }
     let mut out = Vec::new();
     for (i, o) in seq.scene.objects.iter().enumerate() {
-        let (inside, what): (&dyn Fn(DVec3) -> bool, &str) = match o.shape {
+        let (flags, what): (Vec<bool>, _) = match o.shape {
             // A sphere whose box misses every position's box cannot hold one.
             Shape::Sphere { center, radius } if !reach.grown(radius).contains(center) => continue,
-            Shape::Sphere { center, radius } => {
-                (&move |p: DVec3| p.distance(center) < radius, "inside")
-            }
-            Shape::Plane { point, normal } => {
-                (&move |p: DVec3| (p - point).dot(normal) < 0.0, "behind")
-            }
+            Shape::Sphere { center, radius } => (
+                positions
+                    .iter()
+                    .map(|p| p.distance(center) < radius)
+                    .collect(),
+                format!("the camera is inside objects[{i}] (sphere)"),
+            ),
+            Shape::Plane { point, normal } => (
+                positions
+                    .iter()
+                    .map(|&p| (p - point).dot(normal) < 0.0)
+                    .collect(),
+                format!("the camera is behind objects[{i}] (plane), against its normal"),
+            ),
         };
-        let flags: Vec<bool> = positions.iter().map(|&p| inside(p)).collect();
         if flags.contains(&true) {
-            let kind = match o.shape {
-                Shape::Sphere { .. } => "(sphere)",
-                Shape::Plane { .. } => "(plane), against its normal",
-            };
-            out.push((format!("the camera is {what} objects[{i}] {kind}"), flags));
+            out.push((what, flags));
         }
     }
     out
