@@ -62,7 +62,7 @@ fn kernels(c: &mut Criterion) {
     c.bench_function("nearest hit, talk scene x4096", |b| {
         b.iter(|| {
             rays.iter()
-                .filter(|r| world.geometry.nearest(black_box(r)).is_some())
+                .filter(|r| world.geometry.nearest_one(black_box(r)).is_some())
                 .count()
         })
     });

@@ -10,7 +10,7 @@ use crate::output::{FileFormat, pattern::Pattern, png::Compression, stream::Stre
 use crate::progress::Progress;
 use crate::schedule::{self, Files, Job, Task};
 use crate::sequence::{self, Overrides, Sequence};
-use crate::tracer::{self, World};
+use crate::tracer::{self, Kernel, World};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Arc;
@@ -188,6 +188,9 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
             if o.quick { " --quick" } else { "" }
         )
     };
+    if want("kernels") {
+        kernels(o, out, &cmd("kernels"))?;
+    }
     if want("render") || want("threads") {
         let (t2, frame) = render_only(&world, &talk, cores, o.runs)?;
         let rays = frame.rays as f64;
@@ -264,6 +267,74 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
     }
     if want("povray") {
         povray(o, out, &cmd("povray"))?;
+    }
+    Ok(())
+}
+
+/// Every lane width this CPU has on the same frames, interleaved round by round so a busy
+/// machine slows them alike; each ratio is the median of the rounds' ratios to the scalar
+/// kernel. Also checks that every width wrote the same frame.
+fn kernels(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), String> {
+    let kernels: Vec<Kernel> = Kernel::ALL.into_iter().filter(|k| k.supported()).collect();
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let big = if o.quick { (320, 180) } else { (1920, 1080) };
+    let small = if o.quick { (160, 90) } else { (640, 360) };
+    let cases = [
+        ("1 spp", big, "samples: 1"),
+        ("16 spp", small, "samples: 16"),
+        ("final (adaptive 4-64)", small, "quality: final"),
+    ];
+    out(&format!(
+        "talk, render only, {cores} threads, kernels {} interleaved   [{cmd}]",
+        kernels
+            .iter()
+            .map(|k| k.name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    let pool = pool(cores)?;
+    for (name, size, setting) in cases {
+        let text = TALK.replace("render:\n", &format!("render:\n  {setting}\n"));
+        let seq = load(&text, size)?;
+        let world = World::new(seq.scene.clone());
+        let camera = Camera::new(&seq.timeline.pose_of(0)).map_err(|e| e.to_string())?;
+        let mut seconds = vec![Vec::new(); kernels.len()];
+        let mut frames = vec![None; kernels.len()];
+        for _ in 0..o.runs {
+            for (i, &k) in kernels.iter().enumerate() {
+                let start = Instant::now();
+                let frame =
+                    pool.install(|| tracer::render_with(k, &world, &camera, &seq.settings, 0));
+                seconds[i].push(start.elapsed().as_secs_f64());
+                frames[i] = Some(frame.rgb.clone());
+                frame.recycle();
+            }
+        }
+        let same = frames.iter().all(|f| *f == frames[0]);
+        let ratios: Vec<Timing> = (0..kernels.len())
+            .map(|i| timing((0..o.runs).map(|r| seconds[0][r] / seconds[i][r]).collect()))
+            .collect();
+        let figures: Vec<String> = kernels
+            .iter()
+            .zip(&seconds)
+            .zip(&ratios)
+            .map(|((k, s), r)| {
+                let t = timing(s.clone());
+                format!(
+                    "{} {:.1} frames/s ({:.2}x)",
+                    k.name(),
+                    1.0 / t.median,
+                    r.median
+                )
+            })
+            .collect();
+        out(&format!(
+            "  {name} {}x{}: {}; same frame from every kernel: {}",
+            size.0,
+            size.1,
+            figures.join(", "),
+            if same { "yes" } else { "NO" }
+        ));
     }
     Ok(())
 }

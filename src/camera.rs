@@ -5,6 +5,8 @@
 //! centre, along normalize(forward + x·tan(fov/2)·right + y·tan(fov/2)·up). With the camera at
 //! (0,0,1) looking at the origin and fov 90 that is exactly the talk's screen on the plane z = 0.
 
+use crate::tracer::lanes::{F64x1, Lanes};
+use crate::tracer::vec3::V3;
 use glam::DVec3;
 
 /// Where the camera is and where it looks, as the sequence file and the timeline give it.
@@ -85,18 +87,40 @@ impl Camera {
     /// Unit direction through screen point (x, y) as defined in the module doc.
     #[inline]
     pub fn direction(&self, x: f64, y: f64) -> DVec3 {
-        let s = self.tan_half_fov;
-        (self.forward + (x * s) * self.right + (y * s) * self.up).normalize()
+        self.directions(F64x1(x), F64x1(y)).lane(0)
+    }
+
+    /// `direction` for N screen points at once, lane by lane the same arithmetic.
+    #[inline(always)]
+    pub fn directions<V: Lanes>(&self, x: V, y: V) -> V3<V> {
+        let s = V::splat(self.tan_half_fov);
+        let (x, y) = (x * s, y * s);
+        (V3::splat(self.forward) + V3::splat(self.right) * x + V3::splat(self.up) * y).normalize()
     }
 }
 
 /// Screen coordinates of the point (u, v) ∈ [0,1)² inside pixel (row, col) of a width×height image.
 #[inline]
 pub fn screen_point(row: u32, col: u32, u: f64, v: f64, width: u32, height: u32) -> (f64, f64) {
-    let w = f64::from(width);
-    let h = f64::from(height);
-    let x = -1.0 + 2.0 * (f64::from(col) + u) / w;
-    let y = (1.0 - 2.0 * (f64::from(row) + v) / h) * h / w;
+    let (x, y) = screen_points(
+        F64x1(f64::from(row)),
+        F64x1(f64::from(col)),
+        F64x1(u),
+        F64x1(v),
+        width,
+        height,
+    );
+    (x.0, y.0)
+}
+
+/// `screen_point` for N points at once (rows, columns and offsets per lane).
+#[inline(always)]
+pub fn screen_points<V: Lanes>(row: V, col: V, u: V, v: V, width: u32, height: u32) -> (V, V) {
+    let w = V::splat(f64::from(width));
+    let h = V::splat(f64::from(height));
+    let (one, two) = (V::splat(1.0), V::splat(2.0));
+    let x = -one + two * (col + u) / w;
+    let y = (one - two * (row + v) / h) * h / w;
     (x, y)
 }
 

@@ -303,6 +303,7 @@ fn produce(
         ),
         None => None,
     };
+    frame.recycle();
     Ok(Done {
         seconds: start.elapsed().as_secs_f64(),
         file,

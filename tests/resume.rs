@@ -36,7 +36,10 @@ fn render(dir: &Path, args: &[&str]) -> String {
 #[test]
 fn killed_at_any_moment_resumes_to_the_identical_sequence() {
     let tmp = setup("kill");
-    render(&tmp, &["-o", "clean/f_####.png", "--size", "640x360", "-q"]);
+    // Enough work per run (9 samples a pixel) that most kills land mid-run however fast
+    // the tracer gets.
+    let heavy = ["--size", "640x360", "--samples", "9", "-q"];
+    render(&tmp, &[&["-o", "clean/f_####.png"][..], &heavy].concat());
     let mut cut_short = 0;
     for (i, delay_ms) in [30u64, 60, 90, 120, 150, 200, 260, 330, 420, 520, 40, 75]
         .iter()
@@ -48,12 +51,10 @@ fn killed_at_any_moment_resumes_to_the_identical_sequence() {
                 "seq.yaml",
                 "-o",
                 "out/f_####.png",
-                "--size",
-                "640x360",
-                "-q",
                 "--threads",
                 if i % 2 == 0 { "2" } else { "1" },
             ])
+            .args(heavy)
             .current_dir(&tmp)
             .stderr(Stdio::null())
             .spawn()
@@ -77,7 +78,7 @@ fn killed_at_any_moment_resumes_to_the_identical_sequence() {
         }
     }
     assert!(cut_short >= 6, "only {cut_short} kills landed mid-run");
-    render(&tmp, &["-o", "out/f_####.png", "--size", "640x360", "-q"]);
+    render(&tmp, &[&["-o", "out/f_####.png"][..], &heavy].concat());
     assert_same_files(&tmp.join("clean"), &tmp.join("out"));
 }
 

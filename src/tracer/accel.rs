@@ -1,11 +1,20 @@
 //! The geometry the tracer queries: spheres and planes in flat arrays, and a bounding volume
-//! hierarchy over the spheres only when a scene has enough of them to need one. Every hit is
-//! computed by the same `intersect` as the plain loop; the hierarchy only skips spheres whose
-//! (slightly padded) boxes the ray cannot enter, so it never changes an image.
+//! hierarchy over the spheres only when a scene has enough of them to need one. Queries take a
+//! packet of rays (any lane type). Every hit is computed by `intersect::sphere_hit` or
+//! `plane_hit`; the hierarchy only skips spheres whose (slightly padded) boxes no ray of the
+//! packet can enter, so it never changes an image.
+//!
+//! Ties: spheres are tested before planes; among spheres the lower object index wins an exact
+//! tie in t, among planes the earlier one. The hierarchy visits spheres in an order that
+//! depends on the packet, and this rule makes the answer independent of that order, so every
+//! lane width gives the same hit.
 
-use super::intersect::{Hit, Ray, intersect};
+use super::intersect::{Hit, Ray, plane_hit, sphere_hit};
+use super::lanes::{F64x1, Lanes, Mask};
+use super::vec3::V3;
 use crate::scene::{Object, Shape};
 use glam::DVec3;
+use std::ops::Range;
 
 /// Below this many spheres a plain loop beats any hierarchy (measured with `rayreel bench`).
 pub const BVH_MIN_SPHERES: usize = 12;
@@ -15,7 +24,7 @@ const LEAF_SIZE: usize = 4;
 pub struct Geometry {
     /// Spheres in hierarchy order, as plain records so the hot loop needs no shape dispatch.
     spheres: Vec<Ball>,
-    planes: Vec<(Shape, u32)>,
+    planes: Vec<Flat>,
     bvh: Vec<Node>,
 }
 
@@ -23,8 +32,15 @@ pub struct Geometry {
 struct Ball {
     center: DVec3,
     radius: f64,
-    /// radius², for the cheap miss test.
+    /// radius², as every intersection forms it.
     r2: f64,
+    object: u32,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Flat {
+    point: DVec3,
+    normal: DVec3,
     object: u32,
 }
 
@@ -36,6 +52,34 @@ struct Node {
     first: u32,
     /// Spheres in a leaf; 0 for an interior node.
     count: u32,
+    /// Interior: the axis the children were split along (left holds the smaller centres).
+    axis: u32,
+}
+
+/// A packet of rays as the geometry sees them.
+#[derive(Clone, Copy)]
+pub struct Rays<V: Lanes> {
+    pub origin: V3<V>,
+    /// Unit length.
+    pub dir: V3<V>,
+    /// Index of the object each lane starts on, or −1 for eye rays.
+    pub leaving: V,
+}
+
+/// f = origin − centre and |f|² − r² of one sphere for rays from one shared origin (eye rays
+/// of a pinhole camera): computed once a frame with exactly the arithmetic `sphere_hit` uses.
+#[derive(Debug, Clone, Copy)]
+pub struct FromOrigin {
+    f: DVec3,
+    c: f64,
+}
+
+/// The nearest hit of each lane: `hit` lanes have `t` and `object` (an index, as a float).
+#[derive(Clone, Copy)]
+pub struct Nearest<V: Lanes> {
+    pub hit: V::M,
+    pub t: V,
+    pub object: V,
 }
 
 impl Geometry {
@@ -43,14 +87,19 @@ impl Geometry {
         let mut spheres = Vec::new();
         let mut planes = Vec::new();
         for (i, o) in objects.iter().enumerate() {
+            let object = i as u32;
             match o.shape {
                 Shape::Sphere { center, radius } => spheres.push(Ball {
                     center,
                     radius,
                     r2: radius * radius,
-                    object: i as u32,
+                    object,
                 }),
-                Shape::Plane { .. } => planes.push((o.shape, i as u32)),
+                Shape::Plane { point, normal } => planes.push(Flat {
+                    point,
+                    normal,
+                    object,
+                }),
             }
         }
         let mut bvh = Vec::new();
@@ -60,6 +109,7 @@ impl Geometry {
                 max: DVec3::ZERO,
                 first: 0,
                 count: 0,
+                axis: 0,
             });
             let n = spheres.len();
             build(&mut bvh, &mut spheres, 0, 0, n);
@@ -76,156 +126,288 @@ impl Geometry {
         !self.bvh.is_empty()
     }
 
-    pub fn nearest(&self, ray: &Ray) -> Option<Hit> {
-        let mut best = Hit {
-            t: f64::INFINITY,
-            object: usize::MAX,
+    /// One ray's nearest hit (the one-lane packet).
+    pub fn nearest_one(&self, ray: &Ray) -> Option<Hit> {
+        let n = self.nearest(&one_ray(ray), None, true);
+        n.hit.then_some(Hit {
+            t: n.t.0,
+            object: n.object.0 as usize,
+        })
+    }
+
+    /// Whether anything lies on one ray strictly before `max_t`.
+    pub fn occluded_one(&self, ray: &Ray, max_t: f64) -> bool {
+        self.occluded(&one_ray(ray), F64x1(max_t), true)
+    }
+
+    /// Per-sphere constants for rays starting at `origin`, in the order `nearest` wants them.
+    pub fn from_origin(&self, origin: DVec3) -> Vec<FromOrigin> {
+        self.spheres
+            .iter()
+            .map(|b| {
+                let f = origin - b.center;
+                FromOrigin {
+                    f,
+                    c: f.dot(f) - b.r2,
+                }
+            })
+            .collect()
+    }
+
+    /// The nearest hit with t > 0 of each `active` lane. `eye` holds `from_origin` of the
+    /// packet's shared origin when it has one (then no lane is leaving a surface).
+    #[inline(always)]
+    pub fn nearest<V: Lanes>(
+        &self,
+        rays: &Rays<V>,
+        eye: Option<&[FromOrigin]>,
+        active: V::M,
+    ) -> Nearest<V> {
+        let mut search = NearestSearch {
+            geometry: self,
+            rays,
+            eye,
+            active,
+            t: V::splat(f64::INFINITY),
+            object: V::splat(-1.0),
         };
         if self.bvh.is_empty() {
-            closest_ball(&self.spheres, ray, &mut best);
+            search.leaf(0..self.spheres.len(), active);
         } else {
-            self.walk(ray, &mut |range, _| {
-                closest_ball(&self.spheres[range], ray, &mut best);
-                best.t
-            });
+            self.walk(rays, &mut search);
         }
-        closest(&self.planes, ray, &mut best);
-        (best.t < f64::INFINITY).then_some(best)
+        let (mut t, mut object) = (search.t, search.object);
+        for p in &self.planes {
+            let (hit, tp) = plane(p, rays, active);
+            let better = hit.and(tp.lt(t));
+            t = V::select(better, tp, t);
+            object = V::select(better, V::splat(f64::from(p.object)), object);
+        }
+        Nearest {
+            hit: active.and(t.lt(V::splat(f64::INFINITY))),
+            t,
+            object,
+        }
     }
 
-    /// Whether anything lies on `ray` strictly before `max_t`.
-    pub fn occluded(&self, ray: &Ray, max_t: f64) -> bool {
-        if blocked(&self.planes, ray, max_t) {
-            return true;
+    /// The `active` lanes with something on their ray strictly before `max_t`.
+    #[inline(always)]
+    pub fn occluded<V: Lanes>(&self, rays: &Rays<V>, max_t: V, active: V::M) -> V::M {
+        let mut blocked = V::M::none_set();
+        for p in &self.planes {
+            let (hit, t) = plane(p, rays, active.andnot(blocked));
+            blocked = blocked.or(hit.and(t.lt(max_t)));
+        }
+        let mut search = AnySearch {
+            geometry: self,
+            rays,
+            max_t,
+            open: active.andnot(blocked),
+        };
+        if !search.open.any() {
+            return blocked;
         }
         if self.bvh.is_empty() {
-            return blocked_ball(&self.spheres, ray, max_t);
+            search.leaf(0..self.spheres.len(), search.open);
+        } else {
+            self.walk(rays, &mut search);
         }
-        let mut found = false;
-        self.walk(ray, &mut |range, _| {
-            found = blocked_ball(&self.spheres[range], ray, max_t);
-            // A hit ends the walk: nothing can be nearer than "before max_t" matters.
-            if found { f64::NEG_INFINITY } else { max_t }
-        });
-        found
+        active.andnot(search.open)
     }
 
-    /// Visits the leaves whose boxes the ray enters before the limit `visit` returns (the
-    /// nearest hit so far), nearer child first.
-    fn walk(&self, ray: &Ray, visit: &mut dyn FnMut(std::ops::Range<usize>, f64) -> f64) {
-        let inv = DVec3::ONE / ray.dir;
-        let mut limit = f64::INFINITY;
+    #[inline(always)]
+    fn sphere<V: Lanes>(
+        &self,
+        i: usize,
+        eye: Option<&[FromOrigin]>,
+        rays: &Rays<V>,
+        active: V::M,
+    ) -> (V::M, V) {
+        let b = &self.spheres[i];
+        let r2 = V::splat(b.r2);
+        match eye {
+            Some(eye) => {
+                let e = eye[i];
+                let none = V::M::none_set();
+                sphere_hit(
+                    V3::splat(e.f),
+                    Some(V::splat(e.c)),
+                    r2,
+                    rays.dir,
+                    none,
+                    active,
+                )
+            }
+            None => {
+                let own = rays.leaving.eq(V::splat(f64::from(b.object)));
+                let f = rays.origin - V3::splat(b.center);
+                sphere_hit(f, None, r2, rays.dir, own, active)
+            }
+        }
+    }
+
+    /// Visits the leaves whose boxes a ray of the search's lanes enters before its limit,
+    /// nearer child first (as the first searching lane sees them).
+    #[inline(always)]
+    fn walk<V: Lanes, S: Search<V>>(&self, rays: &Rays<V>, search: &mut S) {
+        let inv = V3 {
+            x: inverse(rays.dir.x),
+            y: inverse(rays.dir.y),
+            z: inverse(rays.dir.z),
+        };
         let mut stack = [0u32; 64];
         let mut top = 1;
-        while top > 0 {
+        while top > 0 && search.lanes().any() {
             top -= 1;
             let node = &self.bvh[stack[top] as usize];
-            if entry(node, ray.origin, inv, limit).is_none() {
+            let lanes = search.lanes();
+            let enter = entry(node, rays.origin, inv, search.limit()).and(lanes);
+            if !enter.any() {
                 continue;
             }
             if node.count > 0 {
                 let first = node.first as usize;
-                limit = visit(first..first + node.count as usize, limit);
-                if limit == f64::NEG_INFINITY {
-                    return;
-                }
+                search.leaf(first..first + node.count as usize, enter);
                 continue;
             }
-            let (l, r) = (node.first, node.first + 1);
-            let tl = entry(&self.bvh[l as usize], ray.origin, inv, limit);
-            let tr = entry(&self.bvh[r as usize], ray.origin, inv, limit);
+            let lead = lanes.bits().trailing_zeros() as usize;
+            let d = [rays.dir.x, rays.dir.y, rays.dir.z][node.axis as usize].lane(lead);
             // Push the farther child first so the nearer one is visited first.
-            let order = match (tl, tr) {
-                (Some(a), Some(b)) if a <= b => [Some(r), Some(l)],
-                (Some(_), Some(_)) => [Some(l), Some(r)],
-                (Some(_), None) => [None, Some(l)],
-                (None, Some(_)) => [None, Some(r)],
-                (None, None) => [None, None],
+            let (near, far) = if d < 0.0 {
+                (node.first + 1, node.first)
+            } else {
+                (node.first, node.first + 1)
             };
-            for child in order.into_iter().flatten() {
-                stack[top] = child;
-                top += 1;
+            stack[top] = far;
+            stack[top + 1] = near;
+            top += 2;
+        }
+    }
+}
+
+/// What a walk through the hierarchy looks for: the lanes still searching, how far along
+/// their rays a box must start to matter, and what to do in a leaf.
+trait Search<V: Lanes> {
+    fn lanes(&self) -> V::M;
+    fn limit(&self) -> V;
+    fn leaf(&mut self, spheres: Range<usize>, enter: V::M);
+}
+
+/// The nearest sphere hit so far of each lane.
+struct NearestSearch<'a, V: Lanes> {
+    geometry: &'a Geometry,
+    rays: &'a Rays<V>,
+    eye: Option<&'a [FromOrigin]>,
+    active: V::M,
+    t: V,
+    object: V,
+}
+
+impl<V: Lanes> Search<V> for NearestSearch<'_, V> {
+    #[inline(always)]
+    fn lanes(&self) -> V::M {
+        self.active
+    }
+
+    #[inline(always)]
+    fn limit(&self) -> V {
+        self.t
+    }
+
+    #[inline(always)]
+    fn leaf(&mut self, spheres: Range<usize>, enter: V::M) {
+        for i in spheres {
+            let (hit, t) = self.geometry.sphere(i, self.eye, self.rays, enter);
+            if hit.any() {
+                let object = V::splat(f64::from(self.geometry.spheres[i].object));
+                let tie = t.eq(self.t).and(object.lt(self.object));
+                let better = hit.and(t.lt(self.t).or(tie));
+                self.t = V::select(better, t, self.t);
+                self.object = V::select(better, object, self.object);
             }
         }
     }
 }
 
-/// Lowers `best` to the nearest hit among `shapes`.
-#[inline]
-fn closest(shapes: &[(Shape, u32)], ray: &Ray, best: &mut Hit) {
-    for (shape, object) in shapes {
-        let own = ray.leaving == Some(*object as usize);
-        if let Some(t) = intersect(shape, ray, own)
-            && t < best.t
-        {
-            *best = Hit {
-                t,
-                object: *object as usize,
-            };
+/// Whether anything blocks each lane before `max_t`; lanes leave `open` once blocked.
+struct AnySearch<'a, V: Lanes> {
+    geometry: &'a Geometry,
+    rays: &'a Rays<V>,
+    max_t: V,
+    open: V::M,
+}
+
+impl<V: Lanes> Search<V> for AnySearch<'_, V> {
+    #[inline(always)]
+    fn lanes(&self) -> V::M {
+        self.open
+    }
+
+    #[inline(always)]
+    fn limit(&self) -> V {
+        self.max_t
+    }
+
+    #[inline(always)]
+    fn leaf(&mut self, spheres: Range<usize>, enter: V::M) {
+        let mut open = enter.and(self.open);
+        for i in spheres {
+            if !open.any() {
+                break;
+            }
+            let (hit, t) = self.geometry.sphere(i, None, self.rays, open);
+            let blocked = hit.and(t.lt(self.max_t));
+            open = open.andnot(blocked);
+            self.open = self.open.andnot(blocked);
         }
     }
 }
 
-/// Most rays miss most spheres: the squared distance from the centre to the line (the first
-/// half of `sphere_roots`, the same arithmetic) rejects them before any root or division.
+/// 1/d for the slab test. A zero component would make 0 · ∞ = NaN at a box face; a tiny one
+/// keeps every slab finite and the test conservative.
 #[inline(always)]
-fn hit_ball(b: &Ball, ray: &Ray) -> Option<f64> {
-    let f = ray.origin - b.center;
-    let along = f.dot(ray.dir);
-    let perp = f - along * ray.dir;
-    let disc = b.r2 - perp.dot(perp);
-    if disc.is_nan() || disc < 0.0 {
-        return None;
-    }
-    let shape = Shape::Sphere {
-        center: b.center,
-        radius: b.radius,
-    };
-    intersect(&shape, ray, ray.leaving == Some(b.object as usize))
+fn inverse<V: Lanes>(d: V) -> V {
+    let zero = d.eq(V::splat(0.0));
+    V::splat(1.0) / V::select(zero, V::splat(1e-300).copysign(d), d)
 }
 
-#[inline]
-fn closest_ball(balls: &[Ball], ray: &Ray, best: &mut Hit) {
-    for b in balls {
-        if let Some(t) = hit_ball(b, ray)
-            && t < best.t
-        {
-            *best = Hit {
-                t,
-                object: b.object as usize,
-            };
-        }
+fn one_ray(ray: &Ray) -> Rays<F64x1> {
+    Rays {
+        origin: V3::splat(ray.origin),
+        dir: V3::splat(ray.dir),
+        leaving: F64x1(ray.leaving.map_or(-1.0, |o| o as f64)),
     }
 }
 
-#[inline]
-fn blocked_ball(balls: &[Ball], ray: &Ray, max_t: f64) -> bool {
-    balls
-        .iter()
-        .any(|b| hit_ball(b, ray).is_some_and(|t| t < max_t))
+#[inline(always)]
+fn plane<V: Lanes>(p: &Flat, rays: &Rays<V>, active: V::M) -> (V::M, V) {
+    let own = rays.leaving.eq(V::splat(f64::from(p.object)));
+    plane_hit(
+        V3::splat(p.point),
+        V3::splat(p.normal),
+        rays.origin,
+        rays.dir,
+        own,
+        active,
+    )
 }
 
-/// Whether any of `shapes` lies on the ray before `max_t`.
-#[inline]
-fn blocked(shapes: &[(Shape, u32)], ray: &Ray, max_t: f64) -> bool {
-    for (shape, object) in shapes {
-        let own = ray.leaving == Some(*object as usize);
-        if intersect(shape, ray, own).is_some_and(|t| t < max_t) {
-            return true;
-        }
-    }
-    false
-}
-
-/// Where the ray enters the node's box, if before `limit`.
-#[inline]
-fn entry(node: &Node, origin: DVec3, inv: DVec3, limit: f64) -> Option<f64> {
-    let t0 = (node.min - origin) * inv;
-    let t1 = (node.max - origin) * inv;
-    // min/max skip the NaN of 0 · inf (a ray along a box face), keeping the test conservative.
-    let near = t0.min(t1).max_element().max(0.0);
-    let far = t0.max(t1).min_element().min(limit);
-    (near <= far).then_some(near)
+/// The lanes whose ray enters the node's box at or before their `limit`.
+#[inline(always)]
+fn entry<V: Lanes>(node: &Node, origin: V3<V>, inv: V3<V>, limit: V) -> V::M {
+    let t0 = (V3::splat(node.min) - origin) * inv;
+    let t1 = (V3::splat(node.max) - origin) * inv;
+    let near =
+        t0.x.min(t1.x)
+            .max(t0.y.min(t1.y))
+            .max(t0.z.min(t1.z))
+            .max(V::splat(0.0));
+    let far =
+        t0.x.max(t1.x)
+            .min(t0.y.max(t1.y))
+            .min(t0.z.max(t1.z))
+            .min(limit);
+    near.le(far)
 }
 
 fn bounds(b: &Ball) -> (DVec3, DVec3) {
@@ -249,6 +431,7 @@ fn build(nodes: &mut Vec<Node>, spheres: &mut [Ball], at: usize, lo: usize, hi: 
         max,
         first: lo as u32,
         count: (hi - lo) as u32,
+        axis: 0,
     };
     if hi - lo <= LEAF_SIZE {
         nodes[at] = leaf;
@@ -293,6 +476,7 @@ fn build(nodes: &mut Vec<Node>, spheres: &mut [Ball], at: usize, lo: usize, hi: 
         max,
         first: left as u32,
         count: 0,
+        axis: axis as u32,
     };
     build(nodes, spheres, left, lo, mid);
     build(nodes, spheres, left + 1, mid, hi);
@@ -403,15 +587,15 @@ mod tests {
                 dir,
                 leaving: None,
             };
-            let (a, b) = (geometry.nearest(&ray), nearest(&objects, &ray));
+            let (a, b) = (geometry.nearest_one(&ray), nearest(&objects, &ray));
             assert_eq!(a, b, "ray {i}");
             let limit = a.map_or(f64::INFINITY, |h| h.t * 0.999);
             assert!(
-                !geometry.occluded(&ray, limit) || limit == f64::INFINITY,
+                !geometry.occluded_one(&ray, limit) || limit == f64::INFINITY,
                 "ray {i}"
             );
             assert_eq!(
-                geometry.occluded(&ray, f64::INFINITY),
+                geometry.occluded_one(&ray, f64::INFINITY),
                 b.is_some(),
                 "ray {i}"
             );

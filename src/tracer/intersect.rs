@@ -1,12 +1,84 @@
-//! Ray/shape intersection in f64 with the stable forms of Ray Tracing Gems ch. 7.
+//! Ray/shape intersection in f64 with the stable forms of Ray Tracing Gems ch. 7, written once
+//! for any lane type: `sphere_hit` and `plane_hit` test a packet of rays against one shape.
 //!
-//! Secondary rays start exactly at the hit point and remember the surface they left
-//! (`Ray::leaving`). Spheres and planes are convex, so such a ray can meet the surface it left
-//! again only on a sphere's far side, which is found as the root away from the origin. No
-//! epsilon is involved: no shadow acne at any scale, and no light leaking through thin gaps.
+//! Secondary rays start exactly at the hit point and remember the surface they left (`own`).
+//! Spheres and planes are convex, so such a ray can meet the surface it left again only on a
+//! sphere's far side, which is found as the root away from the origin. No epsilon is
+//! involved: no shadow acne at any scale, and no light leaking through thin gaps.
+//!
+//! `Ray`, `intersect` and `nearest` are the one-ray view of the same code, for tests and tools.
 
+use super::lanes::{F64x1, Lanes, Mask};
+use super::vec3::V3;
 use crate::scene::{Object, Shape};
 use glam::DVec3;
+
+/// Where the packet's rays meet a sphere (centre c, radius r) given f = origin − c, r² and,
+/// when the caller has it, |f|² − r² (eye rays share their origin, so it is computed once a
+/// frame, in exactly this arithmetic). Lanes in `own` start on this sphere and can only meet
+/// its far side, heading inwards. Returns the lanes of `active` that hit, and their t > 0.
+#[inline(always)]
+pub fn sphere_hit<V: Lanes>(
+    f: V3<V>,
+    c: Option<V>,
+    r2: V,
+    d: V3<V>,
+    own: V::M,
+    active: V::M,
+) -> (V::M, V) {
+    let zero = V::splat(0.0);
+    let b = f.dot(d);
+    // r² − |f − (f·d)d|²: the squared distance from the centre to the line is computed
+    // directly, so a small sphere seen from far away keeps its precision. Most rays miss
+    // most spheres, and this rejects them before any root or division.
+    let perp = f - d * b;
+    let disc = r2 - perp.dot(perp);
+    // 0 ≤ disc is false for NaN, as the scalar `disc.is_nan() || disc < 0` rejection.
+    let valid = active.and(zero.le(disc));
+    if !valid.any() {
+        return (valid, zero);
+    }
+    let c = c.unwrap_or_else(|| f.dot(f) - r2);
+    // Heading away from the centre (b > 0) nothing is hit when starting outside (c ≥ 0:
+    // q = −(b + √disc) < 0 and c/q ≤ 0, no root ahead) or when leaving this very sphere
+    // (only inward rays meet their own sphere again; c may round either way on its surface).
+    // Deciding it here spares the root and the division for every shadow and reflection ray
+    // leaving a sphere, and for lines that meet a floor sphere behind them; no result changes.
+    let valid = valid.andnot(zero.lt(b).and(zero.le(c).or(own)));
+    if !valid.any() {
+        return (valid, zero);
+    }
+    let q = -(b + disc.sqrt().copysign(b));
+    let (t0, t1) = (c / q, q);
+    let ordered = t0.le(t1);
+    let (lo, hi) = (V::select(ordered, t0, t1), V::select(ordered, t1, t0));
+    let (lo_ahead, hi_ahead) = (lo.gt(zero), hi.gt(zero));
+    // Heading into its own sphere the ray meets the far side; heading out, nothing.
+    let inward = b.lt(zero);
+    let own_hit = own.and(inward).and(hi_ahead);
+    let other_hit = lo_ahead.or(hi_ahead).andnot(own);
+    // q = 0: tangent at the origin itself, both roots 0, no hit.
+    let hit = valid.and(own_hit.or(other_hit)).andnot(q.eq(zero));
+    let t = V::select(lo_ahead.andnot(own), lo, hi);
+    (hit, t)
+}
+
+/// Where the packet's rays meet the plane through `point` with unit `normal`. A ray leaving
+/// the plane (`own`) never meets it again.
+#[inline(always)]
+pub fn plane_hit<V: Lanes>(
+    point: V3<V>,
+    normal: V3<V>,
+    origin: V3<V>,
+    d: V3<V>,
+    own: V::M,
+    active: V::M,
+) -> (V::M, V) {
+    let denom = normal.dot(d);
+    let t = (point - origin).dot(normal) / denom;
+    let ahead = t.gt(V::splat(0.0)).and(t.lt(V::splat(f64::INFINITY)));
+    (active.and(ahead).andnot(own), t)
+}
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ray {
@@ -24,59 +96,23 @@ pub struct Hit {
     pub object: usize,
 }
 
-/// Both roots of |o + t·d − c|² = r² for unit d, smaller first, or None when the ray misses.
-#[inline(always)]
-pub fn sphere_roots(center: DVec3, radius: f64, origin: DVec3, dir: DVec3) -> Option<(f64, f64)> {
-    let f = origin - center;
-    let b = f.dot(dir);
-    // r² − |f − (f·d)d|²: the squared distance from the centre to the line is computed
-    // directly, so a small sphere seen from far away keeps its precision.
-    let perp = f - b * dir;
-    let disc = radius * radius - perp.dot(perp);
-    if disc.is_nan() || disc < 0.0 {
-        return None;
-    }
-    let c = f.dot(f) - radius * radius;
-    let q = -(b + disc.sqrt().copysign(b));
-    if q == 0.0 {
-        // Tangent at the origin itself: both roots are 0.
-        return Some((0.0, 0.0));
-    }
-    let (t0, t1) = (c / q, q);
-    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
-}
-
 /// Nearest t > 0 at which `ray` meets `shape`. `own` says the ray starts on this shape.
-#[inline(always)]
 pub fn intersect(shape: &Shape, ray: &Ray, own: bool) -> Option<f64> {
-    match *shape {
+    let (o, d) = (V3::<F64x1>::splat(ray.origin), V3::splat(ray.dir));
+    let (hit, t) = match *shape {
         Shape::Sphere { center, radius } => {
-            let (t0, t1) = sphere_roots(center, radius, ray.origin, ray.dir)?;
-            if own {
-                // Heading into its own sphere the ray meets the far side; heading out, nothing.
-                let inward = (ray.origin - center).dot(ray.dir) < 0.0;
-                return (inward && t1 > 0.0).then_some(t1);
-            }
-            if t0 > 0.0 {
-                Some(t0)
-            } else if t1 > 0.0 {
-                Some(t1)
-            } else {
-                None
-            }
+            let f = o - V3::splat(center);
+            sphere_hit(f, None, F64x1(radius * radius), d, own, true)
         }
         Shape::Plane { point, normal } => {
-            if own {
-                return None;
-            }
-            let denom = normal.dot(ray.dir);
-            let t = (point - ray.origin).dot(normal) / denom;
-            (t > 0.0 && t.is_finite()).then_some(t)
+            plane_hit(V3::splat(point), V3::splat(normal), o, d, own, true)
         }
-    }
+    };
+    hit.then_some(t.0)
 }
 
-/// The nearest object `ray` hits, if any.
+/// The nearest object `ray` hits, if any, testing objects in file order (the earlier wins a
+/// tie): the plain loop the tracer's geometry is checked against.
 pub fn nearest(objects: &[Object], ray: &Ray) -> Option<Hit> {
     let mut best: Option<Hit> = None;
     for (i, object) in objects.iter().enumerate() {
@@ -87,22 +123,6 @@ pub fn nearest(objects: &[Object], ray: &Ray) -> Option<Hit> {
         }
     }
     best
-}
-
-/// Whether any object lies on `ray` strictly before distance `max_t`.
-pub fn occluded(objects: &[Object], ray: &Ray, max_t: f64) -> bool {
-    objects.iter().enumerate().any(|(i, object)| {
-        intersect(&object.shape, ray, ray.leaving == Some(i)).is_some_and(|t| t < max_t)
-    })
-}
-
-/// Unit normal of `shape` at point `p`, not yet turned towards the viewer.
-#[inline]
-pub fn normal_at(shape: &Shape, p: DVec3) -> DVec3 {
-    match *shape {
-        Shape::Sphere { center, .. } => (p - center).normalize(),
-        Shape::Plane { normal, .. } => normal,
-    }
 }
 
 #[cfg(test)]
@@ -165,6 +185,14 @@ mod tests {
     }
 
     #[test]
+    fn tangent_at_the_origin_is_no_hit() {
+        // q = 0: the ray starts on the sphere and runs along its tangent plane.
+        let s = sphere([0.0, 0.0, 0.0], 1.0);
+        assert_eq!(intersect(&s, &ray([1., 0., 0.], [0., 0., 1.]), false), None);
+        assert_eq!(intersect(&s, &ray([1., 0., 0.], [0., 0., 1.]), true), None);
+    }
+
+    #[test]
     fn plane_roots_and_parallel_ray() {
         let p = Shape::Plane {
             point: DVec3::new(0.0, -0.7, 0.0),
@@ -180,6 +208,7 @@ mod tests {
             None
         );
         assert_eq!(intersect(&p, &ray([0., 0., 0.], [0., 1., 0.]), false), None);
+        assert_eq!(intersect(&p, &ray([0., 0., 0.], [0., -1., 0.]), true), None);
     }
 
     #[test]

@@ -1,19 +1,24 @@
 //! The core tracer: `render(scene, camera, settings, frame) → Frame`. Pixels are sampled at
-//! their centre (1 sample), on a jittered grid, or adaptively; rows spread over the rayon pool.
+//! their centre (1 sample), on a jittered grid, or adaptively; rows spread over the rayon pool,
+//! and within a row rays travel in packets of as many f64 lanes as the CPU has (`kernel`).
 //! Every pixel depends only on the scene, the camera, the frame number and its own coordinates,
-//! so a frame is byte-identical whatever the thread count or order of work.
+//! so a frame is byte-identical whatever the thread count, order of work or lane width.
 
 pub mod accel;
 pub mod intersect;
+pub mod kernel;
+pub mod lanes;
+mod rows;
 pub mod sample;
 pub mod shade;
+pub mod vec3;
 
-use crate::camera::{Camera, screen_point};
+use crate::camera::Camera;
 use crate::frame::Frame;
 use crate::scene::Scene;
-use glam::DVec3;
+pub use kernel::Kernel;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering};
+use rows::{Pass, RowOut, RowStats};
 
 /// What decides a frame besides the scene and the camera.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -61,14 +66,19 @@ impl World {
 }
 
 pub fn render(world: &World, camera: &Camera, settings: &Settings, frame: u64) -> Frame {
-    let tracer = PixelTracer {
-        world,
-        camera,
-        settings,
-        frame,
-    };
+    render_with(Kernel::chosen(), world, camera, settings, frame)
+}
+
+/// `render` with a given kernel (they all give the same frame; benchmarks compare them).
+pub fn render_with(
+    kernel: Kernel,
+    world: &World,
+    camera: &Camera,
+    settings: &Settings,
+    frame: u64,
+) -> Frame {
     let (w, h) = (settings.width as usize, settings.height as usize);
-    let mut rgb = vec![0f32; 3 * w * h];
+    let mut rgb = crate::frame::buffer(3 * w * h);
     let mut spread = vec![
         0f32;
         if settings.adaptive.is_some() {
@@ -77,27 +87,45 @@ pub fn render(world: &World, camera: &Camera, settings: &Settings, frame: u64) -
             0
         }
     ];
-    let non_finite = AtomicU64::new(0);
-    let rays = AtomicU64::new(0);
-    let all = Samples::All(settings.samples);
-    let mut samples = tracer.pass(&mut rgb, &mut spread, all, |_| true, &non_finite, &rays);
+    let from_origin = world.geometry.from_origin(camera.origin);
+    let first = Pass {
+        world,
+        camera,
+        settings,
+        frame,
+        samples: Samples::All(settings.samples),
+        marked: None,
+        from_origin: &from_origin,
+    };
+    let mut stats = run_pass(kernel, &first, &mut rgb, &mut spread);
     if let Some(a) = settings.adaptive {
         let marked = mark(&rgb, &spread, w, h, a.threshold);
-        let more = Samples::More {
-            have: settings.samples,
-            total: a.max_samples,
+        let more = Pass {
+            samples: Samples::More {
+                have: settings.samples,
+                total: a.max_samples,
+            },
+            marked: Some(&marked),
+            ..first
         };
-        samples += tracer.pass(&mut rgb, &mut [], more, |i| marked[i], &non_finite, &rays);
+        stats = stats + run_pass(kernel, &more, &mut rgb, &mut []);
     }
-    let depth = settings.depth.then(|| tracer.depth());
+    let depth = settings.depth.then(|| {
+        let mut depth = crate::frame::buffer(w * h);
+        depth
+            .par_chunks_mut(w)
+            .enumerate()
+            .for_each(|(row, out)| kernel.depth_row(&first, row as u32, out));
+        depth
+    });
     Frame {
         width: settings.width,
         height: settings.height,
         rgb,
         depth,
-        non_finite: non_finite.into_inner(),
-        samples,
-        rays: rays.into_inner(),
+        non_finite: stats.non_finite,
+        samples: stats.samples,
+        rays: stats.rays,
     }
 }
 
@@ -111,121 +139,26 @@ enum Samples {
     More { have: u32, total: u32 },
 }
 
-struct PixelTracer<'a> {
-    world: &'a World,
-    camera: &'a Camera,
-    settings: &'a Settings,
-    frame: u64,
-}
-
-impl PixelTracer<'_> {
-    /// Renders the pixels `select` picks, rows in parallel; fills `spread` (when not empty)
-    /// with each pixel's largest channel range. Returns the number of samples traced.
-    fn pass(
-        &self,
-        rgb: &mut [f32],
-        spread: &mut [f32],
-        samples: Samples,
-        select: impl Fn(usize) -> bool + Sync,
-        non_finite: &AtomicU64,
-        rays: &AtomicU64,
-    ) -> u64 {
-        let w = self.settings.width as usize;
-        let traced = AtomicU64::new(0);
-        let mut spreads: Vec<Option<&mut [f32]>> = if spread.is_empty() {
-            (0..self.settings.height).map(|_| None).collect()
-        } else {
-            spread.chunks_mut(w).map(Some).collect()
-        };
-        rgb.par_chunks_mut(3 * w)
-            .zip(spreads.par_iter_mut())
-            .enumerate()
-            .for_each(|(row, (rgb_row, spread_row))| {
-                let (mut n, mut bad, mut cast) = (0, 0, 0);
-                for col in (0..w).filter(|col| select(row * w + col)) {
-                    let px = &mut rgb_row[3 * col..3 * col + 3];
-                    let (sum, range, count) =
-                        self.pixel(row as u32, col as u32, samples, &mut cast);
-                    let mean = match samples {
-                        Samples::All(n) => sum / f64::from(n),
-                        Samples::More { have, total } => {
-                            (glam::Vec3::from_slice(px).as_dvec3() * f64::from(have) + sum)
-                                / f64::from(total)
-                        }
-                    };
-                    let mean = mean.as_vec3().to_array();
-                    bad += mean.iter().filter(|v| !v.is_finite()).count() as u64;
-                    px.copy_from_slice(&finite(mean));
-                    if let Some(s) = spread_row.as_deref_mut() {
-                        s[col] = range;
-                    }
-                    n += u64::from(count);
-                }
-                traced.fetch_add(n, Ordering::Relaxed);
-                rays.fetch_add(cast, Ordering::Relaxed);
-                if bad > 0 {
-                    non_finite.fetch_add(bad, Ordering::Relaxed);
-                }
-            });
-        traced.into_inner()
-    }
-
-    /// Sum of the pixel's samples, their largest per-channel range, and how many there were.
-    #[inline]
-    fn pixel(&self, row: u32, col: u32, samples: Samples, rays: &mut u64) -> (DVec3, f32, u32) {
-        let s = self.settings;
-        let index = u64::from(row) * u64::from(s.width) + u64::from(col);
-        if let Samples::All(1) = samples {
-            // The talk's image: one ray through the pixel centre, nothing to spread.
-            let c =
-                shade::trace_counted(self.world, self.eye(row, col, 0.5, 0.5), s.max_depth, rays);
-            return (c, 0.0, 1);
-        }
-        let (first, end) = match samples {
-            Samples::All(n) => (0, n),
-            Samples::More { have, total } => (have, total),
-        };
-        let (mut sum, mut lo, mut hi) = (DVec3::ZERO, DVec3::INFINITY, DVec3::NEG_INFINITY);
-        for k in first..end {
-            let (u, v) = match (samples, s.sampler) {
-                (Samples::More { .. }, _) => sample::r2(self.frame, index, k),
-                (Samples::All(n), Sampler::Stratified) => sample::offset(self.frame, index, k, n),
-                (Samples::All(_), Sampler::Random) => sample::independent(self.frame, index, k),
+/// Runs `pass` over every row in parallel; fills `spread` (when not empty) with each pixel's
+/// largest channel range.
+fn run_pass(kernel: Kernel, pass: &Pass, rgb: &mut [f32], spread: &mut [f32]) -> RowStats {
+    let w = pass.settings.width as usize;
+    let mut spreads: Vec<Option<&mut [f32]>> = if spread.is_empty() {
+        (0..pass.settings.height).map(|_| None).collect()
+    } else {
+        spread.chunks_mut(w).map(Some).collect()
+    };
+    rgb.par_chunks_mut(3 * w)
+        .zip(spreads.par_iter_mut())
+        .enumerate()
+        .map(|(row, (rgb, spread))| {
+            let out = RowOut {
+                rgb,
+                spread: spread.as_deref_mut(),
             };
-            let c = shade::trace_counted(self.world, self.eye(row, col, u, v), s.max_depth, rays);
-            sum += c;
-            lo = lo.min(c);
-            hi = hi.max(c);
-        }
-        (sum, (hi - lo).max_element() as f32, end - first)
-    }
-
-    #[inline]
-    fn eye(&self, row: u32, col: u32, u: f64, v: f64) -> intersect::Ray {
-        let (x, y) = screen_point(row, col, u, v, self.settings.width, self.settings.height);
-        intersect::Ray {
-            origin: self.camera.origin,
-            dir: self.camera.direction(x, y),
-            leaving: None,
-        }
-    }
-
-    /// Distance along each pixel's centre ray to the first hit (+inf for background).
-    fn depth(&self) -> Vec<f32> {
-        let w = self.settings.width as usize;
-        let mut depth = vec![0f32; w * self.settings.height as usize];
-        depth.par_chunks_mut(w).enumerate().for_each(|(row, d)| {
-            for (col, z) in d.iter_mut().enumerate() {
-                let ray = self.eye(row as u32, col as u32, 0.5, 0.5);
-                *z = self
-                    .world
-                    .geometry
-                    .nearest(&ray)
-                    .map_or(f32::INFINITY, |h| h.t as f32);
-            }
-        });
-        depth
-    }
+            kernel.row(pass, row as u32, out)
+        })
+        .reduce(RowStats::default, |a, b| a + b)
 }
 
 /// Pixels that need more samples: their own samples disagree, or they stand out from their

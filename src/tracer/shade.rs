@@ -1,98 +1,237 @@
-//! Whitted shading: Blinn-Phong per light with hard shadows, and mirror reflection.
+//! Whitted shading of a packet of rays: Blinn-Phong per light with hard shadows, and mirror
+//! reflection, for any lane type.
 //!
 //! At a hit with normal N facing the incoming ray d, for each light: ka∘ia always; if the light
 //! is not blocked, kd∘id·max(0, N·L) and, when N·L > 0, ks∘is·max(0, N·H)^(shininess/4) with
 //! H = normalize(L − d). A path sums i0 + r0·i1 + r0·r1·i2 + … over at most `max_depth` surfaces.
+//! Each lane performs exactly the operations, in exactly the order, of one scalar ray.
 
 use super::World;
-use super::intersect::{Hit, Ray, normal_at};
-use crate::scene::{Intensity, Light, Material, Scene};
+use super::accel::{FromOrigin, Nearest, Rays};
+use super::intersect::Ray;
+use super::lanes::{F64x1, Lanes, Mask};
+use super::vec3::V3;
+use crate::scene::{Light, Material, Shape};
 use glam::DVec3;
 
 /// Below this weight a reflection cannot change any output value (f32 colours, half-float
 /// EXRs and 16-bit PNGs alike), so the path ends rather than crawl through subnormals.
 const NEGLIGIBLE_WEIGHT: f64 = 1e-30;
 
-/// Follows one eye ray through at most `max_depth` surfaces; returns its colour.
-pub fn trace(world: &World, eye: Ray, max_depth: u32) -> DVec3 {
-    trace_counted(world, eye, max_depth, &mut 0)
+/// Exponents up to this are whole-number powers by repeated squaring; larger or fractional
+/// ones go through `libm::pow`.
+const MAX_WHOLE_EXPONENT: f64 = 4096.0;
+
+/// A packet of eye rays: `active` lanes carry a ray; `from_origin` is set when they all start
+/// at one point (a pinhole camera), so per-sphere constants are computed once a frame.
+pub struct Eye<'a, V: Lanes> {
+    pub rays: Rays<V>,
+    pub active: V::M,
+    pub from_origin: Option<&'a [FromOrigin]>,
 }
 
-/// `trace`, adding the rays it casts (eye, reflection and shadow rays) to `rays`.
-pub fn trace_counted(world: &World, eye: Ray, max_depth: u32, rays: &mut u64) -> DVec3 {
-    let scene = &world.scene;
-    let mut ray = eye;
-    let mut color = DVec3::ZERO;
-    let mut weight = DVec3::ONE;
-    for _ in 0..max_depth {
-        *rays += 1;
-        let Some(hit) = world.geometry.nearest(&ray) else {
-            color += weight * scene.background;
-            break;
-        };
-        let (point, normal) = surface(scene, &ray, &hit);
-        let material = &scene.materials[scene.objects[hit.object].material];
-        color += weight * local(world, material, point, normal, ray.dir, hit.object, rays);
-        weight *= material.reflection;
-        if weight.max_element() < NEGLIGIBLE_WEIGHT {
+/// Follows one eye ray through at most `max_depth` surfaces; returns its colour (the one-lane
+/// packet, for tests and tools).
+pub fn trace(world: &World, eye: Ray, max_depth: u32) -> DVec3 {
+    let eye = Eye {
+        rays: Rays {
+            origin: V3::<F64x1>::splat(eye.origin),
+            dir: V3::splat(eye.dir),
+            leaving: F64x1(eye.leaving.map_or(-1.0, |o| o as f64)),
+        },
+        active: true,
+        from_origin: None,
+    };
+    trace_packet(world, &eye, max_depth, &mut 0).lane(0)
+}
+
+/// Follows each lane's eye ray through at most `max_depth` surfaces; returns its colour and
+/// adds the rays cast (eye, reflection and shadow rays) to `rays`.
+#[inline(always)]
+pub fn trace_packet<V: Lanes>(
+    world: &World,
+    eye: &Eye<V>,
+    max_depth: u32,
+    rays: &mut u64,
+) -> V3<V> {
+    let background = V3::splat(world.scene.background);
+    let mut ray = eye.rays;
+    let mut active = eye.active;
+    let mut color = V3::zero();
+    let mut weight = V::splat(1.0);
+    for depth in 0..max_depth {
+        *rays += active.count();
+        let from_origin = if depth == 0 { eye.from_origin } else { None };
+        let hit = world.geometry.nearest(&ray, from_origin, active);
+        let missed = active.andnot(hit.hit);
+        if missed.any() {
+            color = V3::select(missed, color + background * weight, color);
+        }
+        active = hit.hit;
+        if !active.any() {
             break;
         }
-        ray = spawn_ray(
-            point,
-            ray.dir - 2.0 * ray.dir.dot(normal) * normal,
-            hit.object,
+        let surface = Surface::gather(world, &hit);
+        let point = ray.origin + ray.dir * hit.t;
+        let normal = surface.normal(point, ray.dir);
+        let local = local(
+            world, &surface, point, normal, ray.dir, hit.object, active, rays,
         );
+        color = V3::select(active, color + local * weight, color);
+        weight = weight * surface.reflection;
+        active = active.andnot(weight.lt(V::splat(NEGLIGIBLE_WEIGHT)));
+        if !active.any() || depth + 1 == max_depth {
+            break;
+        }
+        let bounce = ray.dir - normal * (V::splat(2.0) * ray.dir.dot(normal));
+        ray = Rays {
+            origin: point,
+            dir: bounce.normalize(),
+            leaving: hit.object,
+        };
     }
     color
 }
 
-/// The one way secondary rays leave a surface: from the hit point itself, remembering the
-/// object, so the intersection code can tell the surface just left from a real hit.
-#[inline]
-pub fn spawn_ray(point: DVec3, dir: DVec3, object: usize) -> Ray {
-    Ray {
-        origin: point,
-        dir: dir.normalize(),
-        leaving: Some(object),
+/// What shading needs to know about the objects the lanes hit.
+struct Surface<'a, V: Lanes> {
+    /// Sphere lanes: the centre.
+    center: V3<V>,
+    /// Plane lanes: the unit normal.
+    plane_normal: V3<V>,
+    is_plane: V::M,
+    ambient: V3<V>,
+    diffuse: V3<V>,
+    specular: V3<V>,
+    reflection: V,
+    /// Each lane's material: one reference when every lane hit the same object (the common
+    /// case, shaded with splatted constants), else one per lane.
+    materials: [&'a Material; 16],
+    shared: bool,
+}
+
+impl<'a, V: Lanes> Surface<'a, V> {
+    #[inline(always)]
+    fn gather(world: &'a World, hit: &Nearest<V>) -> Surface<'a, V> {
+        let scene = &world.scene;
+        let lead = hit.hit.bits().trailing_zeros() as usize;
+        let first = hit.object.lane(lead);
+        let shared = hit.hit.andnot(hit.object.eq(V::splat(first))).bits() == 0;
+        if shared {
+            let object = &scene.objects[first as usize];
+            let m = &scene.materials[object.material];
+            let (center, normal, is_plane) = anchor(object.shape);
+            return Surface {
+                center: V3::splat(center),
+                plane_normal: V3::splat(normal),
+                is_plane: if is_plane {
+                    V::M::first(V::N)
+                } else {
+                    V::M::none_set()
+                },
+                ambient: V3::splat(m.ambient),
+                diffuse: V3::splat(m.diffuse),
+                specular: V3::splat(m.specular),
+                reflection: V::splat(m.reflection),
+                materials: [m; 16],
+                shared,
+            };
+        }
+        let mut objects = [first as usize; 16];
+        {
+            let ids = hit.object.array();
+            for (k, o) in objects.iter_mut().enumerate().take(V::N) {
+                if hit.hit.lane(k) {
+                    *o = ids[k] as usize;
+                }
+            }
+        }
+        // Closures below see plain f64 only: a closure is compiled on its own, outside the
+        // kernel's `#[target_feature]` function, so lane operations must stay out of it.
+        let material = |k: usize| &scene.materials[scene.objects[objects[k]].material];
+        let materials: [&Material; 16] = std::array::from_fn(material);
+        let anchors: [(DVec3, DVec3, bool); 16] =
+            std::array::from_fn(|k| anchor(scene.objects[objects[k]].shape));
+        let plane_bits = (0..V::N)
+            .filter(|&k| anchors[k].2)
+            .fold(0, |b, k| b | 1 << k);
+        Surface {
+            center: V3::from_fn(|k| anchors[k].0),
+            plane_normal: V3::from_fn(|k| anchors[k].1),
+            is_plane: V::M::from_bits(plane_bits),
+            ambient: V3::from_fn(|k| materials[k].ambient),
+            diffuse: V3::from_fn(|k| materials[k].diffuse),
+            specular: V3::from_fn(|k| materials[k].specular),
+            reflection: V::from_fn(|k| materials[k].reflection),
+            materials,
+            shared,
+        }
+    }
+
+    /// The unit normal at `point`, turned to face the incoming ray.
+    #[inline(always)]
+    fn normal(&self, point: V3<V>, dir: V3<V>) -> V3<V> {
+        let sphere = (point - self.center).normalize();
+        let n = V3::select(self.is_plane, self.plane_normal, sphere);
+        V3::select(n.dot(dir).gt(V::splat(0.0)), -n, n)
+    }
+
+    /// max(0, N·H)^exponent per lane (see `specular_power`).
+    #[inline(always)]
+    fn specular_power(&self, x: V) -> V {
+        if self.shared {
+            return specular_power(x, self.materials[0]);
+        }
+        let x = x.array();
+        V::from_fn(|k| specular_power(F64x1(x[k]), self.materials[k]).0)
     }
 }
 
-/// Hit point and the unit normal turned to face the incoming ray.
-#[inline]
-fn surface(scene: &Scene, ray: &Ray, hit: &Hit) -> (DVec3, DVec3) {
-    let point = ray.origin + hit.t * ray.dir;
-    let n = normal_at(&scene.objects[hit.object].shape, point);
-    (point, if n.dot(ray.dir) > 0.0 { -n } else { n })
+/// A sphere's centre or a plane's normal, and whether it is a plane.
+#[inline(always)]
+fn anchor(shape: Shape) -> (DVec3, DVec3, bool) {
+    match shape {
+        Shape::Sphere { center, .. } => (center, DVec3::ZERO, false),
+        Shape::Plane { normal, .. } => (DVec3::ZERO, normal, true),
+    }
 }
 
-/// Sum over the lights of the Blinn-Phong terms at one surface point.
-fn local(
+/// Sum over the lights of the Blinn-Phong terms at one surface point per lane.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn local<V: Lanes>(
     world: &World,
-    m: &Material,
-    point: DVec3,
-    normal: DVec3,
-    dir: DVec3,
-    object: usize,
+    s: &Surface<V>,
+    point: V3<V>,
+    normal: V3<V>,
+    dir: V3<V>,
+    object: V,
+    active: V::M,
     rays: &mut u64,
-) -> DVec3 {
-    let mut sum = DVec3::ZERO;
+) -> V3<V> {
+    let mut sum = V3::zero();
     for light in &world.scene.lights {
         let (to_light, distance, scale, i) = match *light {
             Light::Ambient { color } => {
-                sum += m.ambient * color;
+                sum = sum + s.ambient * V3::splat(color);
                 continue;
             }
             Light::Point {
                 position,
                 intensity,
             } => {
-                let (l, dist) = towards(point, position);
-                (l, dist, 1.0, intensity)
+                let (l, d) = towards(point, V3::splat(position));
+                (l, d, None, intensity)
             }
             Light::Directional {
                 to_light,
                 intensity,
-            } => (to_light, f64::INFINITY, 1.0, intensity),
+            } => (
+                V3::splat(to_light),
+                V::splat(f64::INFINITY),
+                None,
+                intensity,
+            ),
             Light::Spot {
                 position,
                 axis,
@@ -100,78 +239,155 @@ fn local(
                 cos_outer,
                 intensity,
             } => {
-                let (l, dist) = towards(point, position);
-                let falloff = smoothstep(cos_outer, cos_inner, -l.dot(axis));
-                (l, dist, falloff, intensity)
+                let (l, d) = towards(point, V3::splat(position));
+                let falloff = smoothstep(cos_outer, cos_inner, -l.dot(V3::splat(axis)));
+                (l, d, Some(falloff), intensity)
             }
         };
-        if scale == 0.0 {
-            continue;
-        }
-        sum += scale * m.ambient * i.ambient;
+        let lit_at_all = match scale {
+            Some(f) => active.andnot(f.eq(V::splat(0.0))),
+            None => active,
+        };
+        let ambient = scaled(scale, s.ambient) * V3::splat(i.ambient);
+        sum = V3::select(lit_at_all, sum + ambient, sum);
         let n_dot_l = normal.dot(to_light);
-        // Diffuse and specular vanish when N·L ≤ 0: a shadow ray is only worth tracing otherwise.
-        if n_dot_l <= 0.0 {
+        // Diffuse and specular vanish when N·L ≤ 0: a shadow ray is only worth tracing
+        // otherwise (NaN, which never compares ≤, is traced like the scalar code did).
+        let facing = lit_at_all.andnot(n_dot_l.le(V::splat(0.0)));
+        if !facing.any() {
             continue;
         }
-        *rays += 1;
-        let shadow = spawn_ray(point, to_light, object);
-        if !world.geometry.occluded(&shadow, distance) {
-            sum += scale * direct(m, &i, normal, to_light, n_dot_l, -dir);
+        *rays += facing.count();
+        let shadow = Rays {
+            origin: point,
+            dir: to_light.normalize(),
+            leaving: object,
+        };
+        let open = facing.andnot(world.geometry.occluded(&shadow, distance, facing));
+        if open.any() {
+            let term = scaled(scale, direct(s, &i, normal, to_light, n_dot_l, dir));
+            sum = V3::select(open, sum + term, sum);
         }
     }
     sum
 }
 
+/// A spot's falloff scales every term; point and directional lights have scale 1, and
+/// 1·x = x exactly, so they skip the multiplications.
+#[inline(always)]
+fn scaled<V: Lanes>(scale: Option<V>, v: V3<V>) -> V3<V> {
+    match scale {
+        Some(f) => v * f,
+        None => v,
+    }
+}
+
 /// Diffuse plus specular for an unblocked light with N·L > 0.
-#[inline]
-fn direct(m: &Material, i: &Intensity, n: DVec3, l: DVec3, n_dot_l: f64, v: DVec3) -> DVec3 {
-    let h = (l + v).normalize();
+#[inline(always)]
+fn direct<V: Lanes>(
+    s: &Surface<V>,
+    i: &crate::scene::Intensity,
+    n: V3<V>,
+    l: V3<V>,
+    n_dot_l: V,
+    dir: V3<V>,
+) -> V3<V> {
+    let h = (l + -dir).normalize();
     // N·H can exceed 1 by an ulp; clamping keeps huge exponents from amplifying it.
-    let n_dot_h = n.dot(h).clamp(0.0, 1.0);
-    m.diffuse * i.diffuse * n_dot_l + m.specular * i.specular * specular_power(n_dot_h, m)
+    let (zero, one) = (V::splat(0.0), V::splat(1.0));
+    let x = n.dot(h);
+    let x = V::select(x.lt(zero), zero, x);
+    let x = V::select(x.gt(one), one, x);
+    let diffuse = s.diffuse * V3::splat(i.diffuse) * n_dot_l;
+    let specular = s.specular * V3::splat(i.specular) * s.specular_power(x);
+    diffuse + specular
 }
 
 /// max(0, N·H)^exponent, with 0^0 = 1. Whole exponents (the talk's 100/4 = 25) multiply;
 /// others go through the portable `libm` pow, so every machine computes the same bits.
 /// Values whose power falls below 1e-30 give 0 before any subnormal arithmetic happens.
-#[inline]
-fn specular_power(x: f64, m: &Material) -> f64 {
+#[inline(always)]
+pub fn specular_power<V: Lanes>(x: V, m: &Material) -> V {
     let e = m.exponent;
     if e == 0.0 {
-        return 1.0;
+        return V::splat(1.0);
     }
-    if x <= m.specular_floor {
-        return 0.0;
-    }
-    if e.fract() == 0.0 && e <= 4096.0 {
-        x.powi(e as i32)
+    let power = if e.fract() == 0.0 && e <= MAX_WHOLE_EXPONENT {
+        powi(x, e as u32)
     } else {
-        libm::pow(x, e)
+        let x = x.array();
+        V::from_fn(|k| libm::pow(x[k], e))
+    };
+    V::select(x.le(V::splat(m.specular_floor)), V::splat(0.0), power)
+}
+
+/// x^e by binary exponentiation, multiplying in a fixed order (the order of compiler-builtins'
+/// `__powidf2`, which `f64::powi` used before): Rust does not pin down `powi`'s result across
+/// versions or platforms, this sequence of IEEE products is the same everywhere.
+#[inline(always)]
+pub fn powi<V: Lanes>(x: V, e: u32) -> V {
+    let (mut result, mut base, mut e) = (V::splat(1.0), x, e);
+    loop {
+        if e & 1 != 0 {
+            result = result * base;
+        }
+        e >>= 1;
+        if e == 0 {
+            return result;
+        }
+        base = base * base;
     }
 }
 
-/// Unit vector from `from` to `to`, and the distance.
-#[inline]
-fn towards(from: DVec3, to: DVec3) -> (DVec3, f64) {
+/// Unit vector from `from` to `to`, and the distance (zero vector and 0 when they coincide).
+#[inline(always)]
+fn towards<V: Lanes>(from: V3<V>, to: V3<V>) -> (V3<V>, V) {
     let v = to - from;
     let d = v.length();
-    if d > 0.0 {
-        (v / d, d)
-    } else {
-        (DVec3::ZERO, 0.0)
-    }
+    let apart = d.gt(V::splat(0.0));
+    (
+        V3::select(apart, v / d, V3::zero()),
+        V::select(apart, d, V::splat(0.0)),
+    )
 }
 
 /// 0 at or below `edge0`, 1 at or above `edge1`, a cubic in between; a step when they meet.
-#[inline]
-fn smoothstep(edge0: f64, edge1: f64, x: f64) -> f64 {
-    if x >= edge1 {
-        return 1.0;
+#[inline(always)]
+fn smoothstep<V: Lanes>(edge0: f64, edge1: f64, x: V) -> V {
+    let (e0, e1) = (V::splat(edge0), V::splat(edge1));
+    let t = (x - e0) / (e1 - e0);
+    let cubic = t * t * (V::splat(3.0) - V::splat(2.0) * t);
+    let low = V::select(x.le(e0), V::splat(0.0), cubic);
+    V::select(e1.le(x), V::splat(1.0), low)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn powi_multiplies_in_binary_order() {
+        for (x, e) in [(0.9f64, 25u32), (1.0000001, 4096), (0.5, 1), (0.3, 7)] {
+            let mut want = 1.0;
+            let (mut b, mut n) = (x, e);
+            while n > 0 {
+                if n & 1 == 1 {
+                    want *= b;
+                }
+                n >>= 1;
+                if n > 0 {
+                    b *= b;
+                }
+            }
+            assert_eq!(powi(F64x1(x), e).0.to_bits(), want.to_bits());
+        }
+        assert_eq!(powi(F64x1(0.7), 0).0, 1.0);
     }
-    if x <= edge0 {
-        return 0.0;
+
+    #[test]
+    fn smoothstep_is_a_step_when_the_edges_meet() {
+        let s = |x| smoothstep(0.5, 0.5, F64x1(x)).0;
+        assert_eq!((s(0.4), s(0.5), s(0.6)), (0.0, 1.0, 1.0));
+        assert_eq!(smoothstep(0.0, 1.0, F64x1(0.5)).0, 0.5);
     }
-    let t = (x - edge0) / (edge1 - edge0);
-    t * t * (3.0 - 2.0 * t)
 }
