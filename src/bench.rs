@@ -339,7 +339,9 @@ fn kernels(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), Stri
     Ok(())
 }
 
-/// Per-ray cost as the sphere count grows, with the hierarchy's build time.
+/// Per-ray cost as the sphere count grows, with the hierarchy's build time. Every round times
+/// every count, so a busy moment slows them alike; each ratio is the median over rounds of
+/// that round's ratio to 4 spheres.
 fn scaling(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), String> {
     let counts: &[usize] = if o.quick {
         &[4, 100, 1000]
@@ -347,23 +349,35 @@ fn scaling(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), Stri
         &[4, 100, 1000, 10_000, 100_000]
     };
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let mut base = None;
     out(&format!(
         "spheres   bvh build   frame 640x360   ns/ray   vs 4 spheres   [{cmd}]"
     ));
+    let mut scenes = Vec::new();
     for &n in counts {
         let seq = sequence::parse(Path::new("field.yaml"), &field(n), &Overrides::default())
             .map_err(|e| e.to_string())?;
         let start = Instant::now();
         let world = World::new(seq.scene.clone());
-        let build = start.elapsed().as_secs_f64();
-        let (t, frame) = render_only(&world, &seq, cores, o.runs)?;
-        let per_ray = t.median * cores as f64 / frame.rays as f64 * 1e9;
-        let ratio = per_ray / *base.get_or_insert(per_ray);
+        scenes.push((seq, world, start.elapsed().as_secs_f64()));
+    }
+    let mut per_ray = vec![Vec::new(); counts.len()];
+    let mut frames = Vec::new();
+    for _ in 0..o.runs {
+        for (i, (seq, world, _)) in scenes.iter().enumerate() {
+            let (t, frame) = render_only(world, seq, cores, 1)?;
+            per_ray[i].push(t.median * cores as f64 / frame.rays as f64 * 1e9);
+            frames.push(frame);
+        }
+    }
+    for (i, (&n, (_, world, build))) in counts.iter().zip(&scenes).enumerate() {
+        let ratio = timing((0..o.runs).map(|r| per_ray[i][r] / per_ray[0][r]).collect());
+        let ns = timing(per_ray[i].clone());
         out(&format!(
-            "{n:>7}   {:>7.1} ms   {:>9.1} ms   {per_ray:>6.0}   {ratio:>6.2}x{}",
+            "{n:>7}   {:>7.1} ms   {:>9.1} ms   {:>6.0}   {:>6.2}x{}",
             build * 1e3,
-            t.median * 1e3,
+            ns.median * frames[i].rays as f64 / cores as f64 / 1e6,
+            ns.median,
+            ratio.median,
             if world.geometry.has_bvh() {
                 ""
             } else {

@@ -250,18 +250,16 @@ impl Geometry {
     /// nearer child first (as the first searching lane sees them).
     #[inline(always)]
     fn walk<V: Lanes, S: Search<V>>(&self, rays: &Rays<V>, search: &mut S) {
-        let inv = V3 {
-            x: inverse(rays.dir.x),
-            y: inverse(rays.dir.y),
-            z: inverse(rays.dir.z),
-        };
+        let slabs = Slabs::new(rays, search.lanes());
+        // Children are ordered by the first searching lane's direction (a heuristic only).
+        let lead = search.lanes().bits().trailing_zeros() as usize;
+        let backwards = [rays.dir.x, rays.dir.y, rays.dir.z].map(|d| d.lane(lead) < 0.0);
         let mut stack = [0u32; 64];
         let mut top = 1;
         while top > 0 && search.lanes().any() {
             top -= 1;
             let node = &self.bvh[stack[top] as usize];
-            let lanes = search.lanes();
-            let enter = entry(node, rays.origin, inv, search.limit()).and(lanes);
+            let enter = slabs.entry(node, search.limit()).and(search.lanes());
             if !enter.any() {
                 continue;
             }
@@ -270,10 +268,8 @@ impl Geometry {
                 search.leaf(first..first + node.count as usize, enter);
                 continue;
             }
-            let lead = lanes.bits().trailing_zeros() as usize;
-            let d = [rays.dir.x, rays.dir.y, rays.dir.z][node.axis as usize].lane(lead);
             // Push the farther child first so the nearer one is visited first.
-            let (near, far) = if d < 0.0 {
+            let (near, far) = if backwards[node.axis as usize] {
                 (node.first + 1, node.first)
             } else {
                 (node.first, node.first + 1)
@@ -363,14 +359,6 @@ impl<V: Lanes> Search<V> for AnySearch<'_, V> {
     }
 }
 
-/// 1/d for the slab test. A zero component would make 0 · ∞ = NaN at a box face; a tiny one
-/// keeps every slab finite and the test conservative.
-#[inline(always)]
-fn inverse<V: Lanes>(d: V) -> V {
-    let zero = d.eq(V::splat(0.0));
-    V::splat(1.0) / V::select(zero, V::splat(1e-300).copysign(d), d)
-}
-
 fn one_ray(ray: &Ray) -> Rays<F64x1> {
     Rays {
         origin: V3::splat(ray.origin),
@@ -392,22 +380,97 @@ fn plane<V: Lanes>(p: &Flat, rays: &Rays<V>, active: V::M) -> (V::M, V) {
     )
 }
 
-/// The lanes whose ray enters the node's box at or before their `limit`.
+/// What the box tests of one walk share: each lane's origin and reciprocal direction, and
+/// per axis whether every searching lane runs the same way along it (then the near and far
+/// planes of a box are known without comparing).
+struct Slabs<V: Lanes> {
+    origin: V3<V>,
+    inv: V3<V>,
+    /// Per axis: Some(true) when every lane's direction is negative, Some(false) when every
+    /// one is positive, None when they differ.
+    backwards: [Option<bool>; 3],
+}
+
+impl<V: Lanes> Slabs<V> {
+    #[inline(always)]
+    fn new(rays: &Rays<V>, lanes: V::M) -> Slabs<V> {
+        let inv = V3 {
+            x: inverse(rays.dir.x),
+            y: inverse(rays.dir.y),
+            z: inverse(rays.dir.z),
+        };
+        let zero = V::splat(0.0);
+        let uniform = |negative: V::M, positive: V::M| {
+            let (neg, pos) = (negative.and(lanes).bits(), positive.and(lanes).bits());
+            let all = lanes.bits();
+            if neg == all {
+                Some(true)
+            } else if pos == all {
+                Some(false)
+            } else {
+                None
+            }
+        };
+        let backwards = [
+            uniform(inv.x.lt(zero), zero.lt(inv.x)),
+            uniform(inv.y.lt(zero), zero.lt(inv.y)),
+            uniform(inv.z.lt(zero), zero.lt(inv.z)),
+        ];
+        Slabs {
+            origin: rays.origin,
+            inv,
+            backwards,
+        }
+    }
+
+    /// The lanes whose ray enters the node's box at or before their `limit`.
+    #[inline(always)]
+    fn entry(&self, node: &Node, limit: V) -> V::M {
+        let (x0, x1) = slab(
+            node.min.x,
+            node.max.x,
+            self.origin.x,
+            self.inv.x,
+            self.backwards[0],
+        );
+        let (y0, y1) = slab(
+            node.min.y,
+            node.max.y,
+            self.origin.y,
+            self.inv.y,
+            self.backwards[1],
+        );
+        let (z0, z1) = slab(
+            node.min.z,
+            node.max.z,
+            self.origin.z,
+            self.inv.z,
+            self.backwards[2],
+        );
+        let near = x0.max(y0).max(z0).max(V::splat(0.0));
+        let far = x1.min(y1).min(z1).min(limit);
+        near.le(far)
+    }
+}
+
+/// Where the rays cross the planes at `lo` and `hi` along one axis: (entry, exit).
 #[inline(always)]
-fn entry<V: Lanes>(node: &Node, origin: V3<V>, inv: V3<V>, limit: V) -> V::M {
-    let t0 = (V3::splat(node.min) - origin) * inv;
-    let t1 = (V3::splat(node.max) - origin) * inv;
-    let near =
-        t0.x.min(t1.x)
-            .max(t0.y.min(t1.y))
-            .max(t0.z.min(t1.z))
-            .max(V::splat(0.0));
-    let far =
-        t0.x.max(t1.x)
-            .min(t0.y.max(t1.y))
-            .min(t0.z.max(t1.z))
-            .min(limit);
-    near.le(far)
+fn slab<V: Lanes>(lo: f64, hi: f64, origin: V, inv: V, backwards: Option<bool>) -> (V, V) {
+    let t0 = (V::splat(lo) - origin) * inv;
+    let t1 = (V::splat(hi) - origin) * inv;
+    match backwards {
+        Some(false) => (t0, t1),
+        Some(true) => (t1, t0),
+        None => (t0.min(t1), t0.max(t1)),
+    }
+}
+
+/// 1/d for the slab test. A zero component would make 0 · ∞ = NaN at a box face; a tiny one
+/// keeps every slab finite and the test conservative.
+#[inline(always)]
+fn inverse<V: Lanes>(d: V) -> V {
+    let zero = d.eq(V::splat(0.0));
+    V::splat(1.0) / V::select(zero, V::splat(1e-300).copysign(d), d)
 }
 
 fn bounds(b: &Ball) -> (DVec3, DVec3) {
@@ -445,13 +508,10 @@ fn build(nodes: &mut Vec<Node>, spheres: &mut [Ball], at: usize, lo: usize, hi: 
     } else {
         2
     };
-    let mid = match sah_split(
-        &mut spheres[lo..hi],
-        axis,
-        cmin[axis],
-        extent[axis],
-        area(min, max),
-    ) {
+    let (start, span) = (cmin[axis], extent[axis]);
+    let split = sah_split(&spheres[lo..hi], axis, start, span, area(min, max))
+        .and_then(|bin| partition(&mut spheres[lo..hi], axis, start, span, bin));
+    let mid = match split {
         Some(m) => lo + m,
         None if hi - lo <= 4 * LEAF_SIZE => {
             nodes[at] = leaf;
@@ -487,23 +547,29 @@ fn area(min: DVec3, max: DVec3) -> f64 {
     d.x * d.y + d.y * d.z + d.z * d.x
 }
 
-/// Partitions `spheres` at the cheapest of 16 bin boundaries; None when no split beats a leaf.
+const BINS: usize = 16;
+
+/// The bin of a sphere's centre among 16 along `axis`.
+fn bin(b: &Ball, axis: usize, start: f64, extent: f64) -> usize {
+    (((b.center[axis] - start) / extent * BINS as f64) as usize).min(BINS - 1)
+}
+
+/// The cheapest of 16 bin boundaries along `axis` by the surface area heuristic; None when
+/// no split beats a leaf.
 fn sah_split(
-    spheres: &mut [Ball],
+    spheres: &[Ball],
     axis: usize,
     start: f64,
     extent: f64,
     parent_area: f64,
 ) -> Option<usize> {
-    const BINS: usize = 16;
     if extent <= 0.0 || parent_area <= 0.0 {
         return None;
     }
-    let bin = |b: &Ball| (((b.center[axis] - start) / extent * BINS as f64) as usize).min(BINS - 1);
     let mut boxes = [(DVec3::INFINITY, DVec3::NEG_INFINITY, 0usize); BINS];
-    for b in spheres.iter() {
+    for b in spheres {
         let (lo, hi) = bounds(b);
-        let e = &mut boxes[bin(b)];
+        let e = &mut boxes[bin(b, axis, start, extent)];
         *e = (e.0.min(lo), e.1.max(hi), e.2 + 1);
     }
     // Cost of splitting after bin i: area-weighted sphere counts on both sides.
@@ -522,12 +588,21 @@ fn sah_split(
         .map(|i| (i, left[i].0 + right[BINS - 2 - i].0))
         .filter(|&(i, _)| left[i].1 > 0 && right[BINS - 2 - i].1 > 0)
         .min_by(|a, b| a.1.total_cmp(&b.1))?;
-    if cost >= parent_area * spheres.len() as f64 {
-        return None;
-    }
+    (cost < parent_area * spheres.len() as f64).then_some(best)
+}
+
+/// Moves the spheres in bins up to `last` to the front; returns how many, if both sides
+/// have some.
+fn partition(
+    spheres: &mut [Ball],
+    axis: usize,
+    start: f64,
+    extent: f64,
+    last: usize,
+) -> Option<usize> {
     let mut m = 0;
     for i in 0..spheres.len() {
-        if bin(&spheres[i]) <= best {
+        if bin(&spheres[i], axis, start, extent) <= last {
             spheres.swap(i, m);
             m += 1;
         }

@@ -1,11 +1,14 @@
-//! Which lane width traces a frame. The kernels are one generic code path (`rows::row`),
+//! Which lane width traces a frame. The kernels are one generic code path (`rows::band`),
 //! instantiated for 1 lane (the scalar oracle, any CPU), packets of 8 lanes in pairs of AVX2
 //! registers (4 f64 per instruction) and packets of 16 lanes in pairs of AVX-512 registers
 //! (8 f64 per instruction), behind `#[target_feature]` entry points, so the released binary
 //! runs on any x86-64 and builds elsewhere. The widest the CPU has is used unless `RAYREEL_KERNEL=scalar|avx2|avx512`
 //! asks for another (tests and `rayreel bench` compare them); every width gives the same bytes.
 
+use super::World;
+use super::intersect::Ray;
 use super::rows::{self, Pass, RowOut};
+use glam::DVec3;
 use std::sync::OnceLock;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -72,15 +75,58 @@ impl Kernel {
             .unwrap_or(Kernel::Scalar)
     }
 
-    /// Runs one pass over one row with this kernel.
-    pub(super) fn row(self, pass: &Pass, row: u32, out: RowOut) -> rows::RowStats {
+    /// Traces arbitrary rays through at most `max_depth` surfaces each, in packets of this
+    /// kernel's width: their colours, and the rays cast (eye, reflection and shadow rays).
+    /// Tests compare every width with the scalar kernel through this, lane by lane.
+    pub fn trace(self, world: &World, rays: &[Ray], max_depth: u32) -> (Vec<DVec3>, u64) {
+        let mut out = vec![DVec3::ZERO; rays.len()];
+        let cast = match self {
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx2 if self.supported() => unsafe {
+                x86::rays_avx2(world, rays, max_depth, &mut out)
+            },
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx512 if self.supported() => unsafe {
+                x86::rays_avx512(world, rays, max_depth, &mut out)
+            },
+            _ => rows::rays::<super::lanes::F64x1>(world, rays, max_depth, &mut out),
+        };
+        (out, cast)
+    }
+
+    /// Rows a band of one pass holds: the height of this kernel's tiles.
+    pub(super) fn band_rows(self) -> usize {
+        rows::tile_rows(self.lanes())
+    }
+
+    /// Runs one pass over the band of rows starting at `top` with this kernel.
+    pub(super) fn band(self, pass: &Pass, top: u32, out: RowOut) -> rows::RowStats {
         match self {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: a kernel is only chosen when `supported` said the CPU has the feature.
-            Kernel::Avx2 if self.supported() => unsafe { x86::row_avx2(pass, row, out) },
+            Kernel::Avx2 if self.supported() => unsafe { x86::band_avx2(pass, top, out) },
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 if self.supported() => unsafe { x86::row_avx512(pass, row, out) },
-            _ => rows::row::<super::lanes::F64x1>(pass, row, out),
+            Kernel::Avx512 if self.supported() => unsafe { x86::band_avx512(pass, top, out) },
+            _ => rows::band::<super::lanes::F64x1>(pass, top, out),
+        }
+    }
+
+    /// Adds samples to the `pixels` of a frame whose means are `rgb`; new means into `out`.
+    pub(super) fn marked(
+        self,
+        pass: &Pass,
+        pixels: &[u32],
+        rgb: &[f32],
+        out: &mut [[f32; 3]],
+    ) -> rows::RowStats {
+        match self {
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx2 if self.supported() => unsafe { x86::marked_avx2(pass, pixels, rgb, out) },
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx512 if self.supported() => unsafe {
+                x86::marked_avx512(pass, pixels, rgb, out)
+            },
+            _ => rows::marked::<super::lanes::F64x1>(pass, pixels, rgb, out),
         }
     }
 
@@ -101,18 +147,61 @@ mod x86 {
     use super::super::lanes::Pair;
     use super::super::lanes::x86::{F64x4, F64x8};
     use super::rows::{self, Pass, RowOut, RowStats};
+    use crate::tracer::World;
+    use crate::tracer::intersect::Ray;
+    use glam::DVec3;
 
     type Avx2Packet = Pair<F64x4>;
     type Avx512Packet = Pair<F64x8>;
 
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn row_avx2(pass: &Pass, row: u32, out: RowOut) -> RowStats {
-        rows::row::<Avx2Packet>(pass, row, out)
+    pub(super) unsafe fn band_avx2(pass: &Pass, top: u32, out: RowOut) -> RowStats {
+        rows::band::<Avx2Packet>(pass, top, out)
     }
 
     #[target_feature(enable = "avx512f")]
-    pub(super) unsafe fn row_avx512(pass: &Pass, row: u32, out: RowOut) -> RowStats {
-        rows::row::<Avx512Packet>(pass, row, out)
+    pub(super) unsafe fn band_avx512(pass: &Pass, top: u32, out: RowOut) -> RowStats {
+        rows::band::<Avx512Packet>(pass, top, out)
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn marked_avx2(
+        pass: &Pass,
+        pixels: &[u32],
+        rgb: &[f32],
+        out: &mut [[f32; 3]],
+    ) -> RowStats {
+        rows::marked::<Avx2Packet>(pass, pixels, rgb, out)
+    }
+
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn marked_avx512(
+        pass: &Pass,
+        pixels: &[u32],
+        rgb: &[f32],
+        out: &mut [[f32; 3]],
+    ) -> RowStats {
+        rows::marked::<Avx512Packet>(pass, pixels, rgb, out)
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn rays_avx2(
+        world: &World,
+        rays: &[Ray],
+        depth: u32,
+        out: &mut [DVec3],
+    ) -> u64 {
+        rows::rays::<Avx2Packet>(world, rays, depth, out)
+    }
+
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn rays_avx512(
+        world: &World,
+        rays: &[Ray],
+        depth: u32,
+        out: &mut [DVec3],
+    ) -> u64 {
+        rows::rays::<Avx512Packet>(world, rays, depth, out)
     }
 
     #[target_feature(enable = "avx2")]

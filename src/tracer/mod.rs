@@ -94,7 +94,6 @@ pub fn render_with(
         settings,
         frame,
         samples: Samples::All(settings.samples),
-        marked: None,
         from_origin: &from_origin,
     };
     let mut stats = run_pass(kernel, &first, &mut rgb, &mut spread);
@@ -105,10 +104,9 @@ pub fn render_with(
                 have: settings.samples,
                 total: a.max_samples,
             },
-            marked: Some(&marked),
             ..first
         };
-        stats = stats + run_pass(kernel, &more, &mut rgb, &mut []);
+        stats = stats + extend(kernel, &more, &marked, &mut rgb);
     }
     let depth = settings.depth.then(|| {
         let mut depth = crate::frame::buffer(w * h);
@@ -139,26 +137,47 @@ enum Samples {
     More { have: u32, total: u32 },
 }
 
-/// Runs `pass` over every row in parallel; fills `spread` (when not empty) with each pixel's
-/// largest channel range.
+/// Runs `pass` over every band of rows in parallel; fills `spread` (when not empty) with each
+/// pixel's largest channel range.
 fn run_pass(kernel: Kernel, pass: &Pass, rgb: &mut [f32], spread: &mut [f32]) -> RowStats {
+    let rows = kernel.band_rows();
     let w = pass.settings.width as usize;
+    let bands = (pass.settings.height as usize).div_ceil(rows);
     let mut spreads: Vec<Option<&mut [f32]>> = if spread.is_empty() {
-        (0..pass.settings.height).map(|_| None).collect()
+        (0..bands).map(|_| None).collect()
     } else {
-        spread.chunks_mut(w).map(Some).collect()
+        spread.chunks_mut(w * rows).map(Some).collect()
     };
-    rgb.par_chunks_mut(3 * w)
+    rgb.par_chunks_mut(3 * w * rows)
         .zip(spreads.par_iter_mut())
         .enumerate()
-        .map(|(row, (rgb, spread))| {
+        .map(|(band, (rgb, spread))| {
             let out = RowOut {
                 rgb,
                 spread: spread.as_deref_mut(),
             };
-            kernel.row(pass, row as u32, out)
+            kernel.band(pass, (band * rows) as u32, out)
         })
         .reduce(RowStats::default, |a, b| a + b)
+}
+
+/// Adds samples to the marked pixels, packed in raster order across rows so packets stay
+/// full however sparse the marks are.
+fn extend(kernel: Kernel, pass: &Pass, marked: &[bool], rgb: &mut [f32]) -> RowStats {
+    let pixels: Vec<u32> = (0..marked.len() as u32)
+        .filter(|&i| marked[i as usize])
+        .collect();
+    let mut means = vec![[0f32; 3]; pixels.len()];
+    // Tasks of 256 pixels: a whole number of packets of every width.
+    let stats = means
+        .par_chunks_mut(256)
+        .zip(pixels.par_chunks(256))
+        .map(|(out, pixels)| kernel.marked(pass, pixels, rgb, out))
+        .reduce(RowStats::default, |a, b| a + b);
+    for (&p, m) in pixels.iter().zip(&means) {
+        rgb[3 * p as usize..][..3].copy_from_slice(m);
+    }
+    stats
 }
 
 /// Pixels that need more samples: their own samples disagree, or they stand out from their

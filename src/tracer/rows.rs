@@ -1,25 +1,26 @@
-//! One pass over one row of a frame, for any lane type: the selected pixels are taken N at a
-//! time (adjacent ones, so their rays are coherent), and each packet traces sample k of all
-//! its pixels together, for k in order. Every pixel therefore sums exactly the samples it
-//! summed one ray at a time, in the same order, and its value cannot depend on the width.
+//! A frame's pixels traced in packets, for any lane type. A pass takes its pixels N at a time
+//! (a near-square tile of a band of rows, or the marked pixels of the whole frame in raster order, so
+//! their rays are coherent and packets stay full), and each packet traces sample k of all its
+//! pixels together, for k in order. Every pixel therefore sums exactly the samples it summed
+//! one ray at a time, in the same order, and its value cannot depend on the width.
 
 use super::accel::{FromOrigin, Rays};
+use super::intersect::Ray;
 use super::lanes::{Lanes, Mask};
+use super::sample::{Pattern, Seed};
 use super::shade::{self, Eye};
 use super::vec3::V3;
-use super::{Sampler, Samples, Settings, World, finite, sample};
+use super::{Sampler, Samples, Settings, World, finite};
 use crate::camera::{Camera, screen_points};
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 
-/// Everything one pass over a frame needs, shared by its rows.
+/// Everything one pass over a frame needs, shared by its packets.
 pub(super) struct Pass<'a> {
     pub world: &'a World,
     pub camera: &'a Camera,
     pub settings: &'a Settings,
     pub frame: u64,
     pub samples: Samples,
-    /// Pixels this pass renders: all, or those marked (row-major).
-    pub marked: Option<&'a [bool]>,
     /// `Geometry::from_origin` of the camera position.
     pub from_origin: &'a [FromOrigin],
 }
@@ -49,60 +50,148 @@ impl std::ops::Add for RowStats {
     }
 }
 
-#[inline(always)]
-pub(super) fn row<V: Lanes>(pass: &Pass, row: u32, mut out: RowOut) -> RowStats {
-    let w = pass.settings.width;
-    let mut stats = RowStats::default();
-    let mut cols = [0u32; 16];
-    let mut n = 0;
-    for col in 0..w {
-        let index = row as usize * w as usize + col as usize;
-        if pass.marked.is_some_and(|m| !m[index]) {
-            continue;
+/// Up to 16 pixels traced together. Lane k holds a pixel when bit k of `valid` is set; other
+/// lanes repeat the first pixel (a valid ray, masked out of every result).
+#[derive(Clone, Copy)]
+struct Pixels {
+    rows: [u32; 16],
+    cols: [u32; 16],
+    valid: u32,
+}
+
+impl Pixels {
+    /// The pixels `at(k)` gives for lanes 0..16, where it gives one.
+    fn new(at: impl Fn(usize) -> Option<(u32, u32)>) -> Pixels {
+        let (mut rows, mut cols, mut valid) = ([0; 16], [0; 16], 0u32);
+        for k in 0..16 {
+            if let Some((r, c)) = at(k) {
+                (rows[k], cols[k]) = (r, c);
+                valid |= 1 << k;
+            }
         }
-        cols[n] = col;
-        n += 1;
-        if n == V::N {
-            packet::<V>(pass, row, &cols[..n], &mut out, &mut stats);
-            n = 0;
+        let lead = valid.trailing_zeros() as usize;
+        for k in (0..16).filter(|k| valid >> k & 1 == 0) {
+            (rows[k], cols[k]) = (rows[lead], cols[lead]);
         }
+        Pixels { rows, cols, valid }
     }
-    if n > 0 {
-        packet::<V>(pass, row, &cols[..n], &mut out, &mut stats);
+
+    fn lanes(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..16).filter(|k| self.valid >> k & 1 == 1)
+    }
+}
+
+/// Rows of a tile of `n` lanes: packets are near-square tiles (4×4 for 16 lanes, 4×2 for 8),
+/// whose rays stay closer together than a strip's, so they visit fewer hierarchy nodes and
+/// more often hit one object.
+pub(super) const fn tile_rows(n: usize) -> usize {
+    match n {
+        16 => 4,
+        8 | 4 => 2,
+        _ => 1,
+    }
+}
+
+/// What a packet found for its pixels: the f32 means (already made finite) and spreads.
+struct Means {
+    rgb: [[f32; 3]; 16],
+    spread: [f32; 16],
+}
+
+/// A pass that traces every pixel of a band of `tile_rows(V::N)` rows starting at `top` (the
+/// last band may be shorter), a tile per packet.
+#[inline(always)]
+pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
+    let w = pass.settings.width;
+    let RowOut { rgb, mut spread } = out;
+    let rows = (rgb.len() / (3 * w as usize)) as u32;
+    let tile_w = (V::N / tile_rows(V::N)) as u32;
+    let mut stats = RowStats::default();
+    for left in (0..w).step_by(tile_w as usize) {
+        let pixels = Pixels::new(|k| {
+            let (r, c) = (k as u32 / tile_w, left + k as u32 % tile_w);
+            (k < V::N && r < rows && c < w).then_some((top + r, c))
+        });
+        let means = packet::<V>(pass, &pixels, None, spread.is_some(), &mut stats);
+        for k in pixels.lanes() {
+            let i = (pixels.rows[k] - top) as usize * w as usize + pixels.cols[k] as usize;
+            rgb[3 * i..][..3].copy_from_slice(&means.rgb[k]);
+            if let Some(spread) = spread.as_deref_mut() {
+                spread[i] = means.spread[k];
+            }
+        }
     }
     stats
 }
 
-/// Traces every sample of up to N pixels of one row and stores their means. Lane k's sum,
+/// A pass that adds samples to the pixels `marked` (row-major indices) of a frame whose
+/// current means are `rgb`; writes their new means to `out`, one per marked pixel.
+#[inline(always)]
+pub(super) fn marked<V: Lanes>(
+    pass: &Pass,
+    marked: &[u32],
+    rgb: &[f32],
+    out: &mut [[f32; 3]],
+) -> RowStats {
+    let w = pass.settings.width;
+    let mut stats = RowStats::default();
+    for (pixels, out) in marked.chunks(V::N).zip(out.chunks_mut(V::N)) {
+        let packet_pixels = Pixels::new(|k| pixels.get(k).map(|&p| (p / w, p % w)));
+        let old: [[f32; 3]; 16] = std::array::from_fn(|k| {
+            let i = 3 * pixels[k.min(pixels.len() - 1)] as usize;
+            [rgb[i], rgb[i + 1], rgb[i + 2]]
+        });
+        let means = packet::<V>(pass, &packet_pixels, Some(&old), false, &mut stats);
+        out.copy_from_slice(&means.rgb[..pixels.len()]);
+    }
+    stats
+}
+
+/// Traces every sample of up to N pixels and returns their means, folding in the means
+/// `old` they had (with the samples before this pass) when a pass extends them. Lane k's sum,
 /// range and mean are the scalar ones of its pixel: glam's `DVec3::min`/`max` and
 /// `max_element` compare exactly as the lanes' `min`/`max` do.
 #[inline(always)]
-fn packet<V: Lanes>(pass: &Pass, row: u32, cols: &[u32], out: &mut RowOut, stats: &mut RowStats) {
+fn packet<V: Lanes>(
+    pass: &Pass,
+    px: &Pixels,
+    old: Option<&[[f32; 3]; 16]>,
+    spread: bool,
+    stats: &mut RowStats,
+) -> Means {
     let s = pass.settings;
-    let last = cols.len() - 1;
-    // Lanes past the last pixel repeat it: a valid ray, masked out of every result.
-    let col = V::from_fn(|k| f64::from(cols[k.min(last)]));
-    let index = |k: usize| u64::from(row) * u64::from(s.width) + u64::from(cols[k.min(last)]);
+    let pattern = match (pass.samples, s.sampler) {
+        // The talk's image: one ray through the pixel centre, whatever the sampler.
+        (Samples::All(1), _) => Pattern::Centre,
+        (Samples::More { .. }, _) => Pattern::R2,
+        (Samples::All(n), Sampler::Stratified) => Pattern::stratified(n),
+        (Samples::All(_), Sampler::Random) => Pattern::Independent,
+    };
+    let seeds: [Seed; 16] = std::array::from_fn(|k| {
+        let pixel = u64::from(px.rows[k]) * u64::from(s.width) + u64::from(px.cols[k]);
+        Seed::new(pattern, pass.frame, pixel)
+    });
     let (first, end) = match pass.samples {
         Samples::All(n) => (0, n),
         Samples::More { have, total } => (have, total),
     };
-    let range = out.spread.is_some() && end - first > 1;
+    let range = spread && end - first > 1;
+    let row = V::from_fn(|k| f64::from(px.rows[k]));
+    let col = V::from_fn(|k| f64::from(px.cols[k]));
     let mut sum = V3::<V>::zero();
     let (mut lo, mut hi) = (
         V3::<V>::splat(DVec3::INFINITY),
         V3::<V>::splat(DVec3::NEG_INFINITY),
     );
     for k in first..end {
-        let (u, v) = offsets::<V>(pass, &index, k);
-        let dir = eye_directions(pass, row, col, u, v);
+        let (u, v) = offsets::<V>(pattern, &seeds, k);
         let eye = Eye {
             rays: Rays {
                 origin: V3::splat(pass.camera.origin),
-                dir,
+                dir: eye_directions(pass, row, col, u, v),
                 leaving: V::splat(-1.0),
             },
-            active: V::M::first(cols.len()),
+            active: V::M::from_bits(px.valid),
             from_origin: Some(pass.from_origin),
         };
         let c = shade::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays);
@@ -120,61 +209,73 @@ fn packet<V: Lanes>(pass: &Pass, row: u32, cols: &[u32], out: &mut RowOut, stats
             };
         }
     }
-    if let Some(spread) = out.spread.as_deref_mut() {
+    let mut means = Means {
+        rgb: [[0.0; 3]; 16],
+        spread: [0.0; 16],
+    };
+    if range {
         let d = hi - lo;
-        let widest = d.x.max(d.y).max(d.z).array();
-        for (lane, &col) in cols.iter().enumerate() {
-            spread[col as usize] = if range { widest[lane] as f32 } else { 0.0 };
-        }
+        d.x.max(d.y).max(d.z).store_f32(&mut means.spread);
     }
-    let mean = match pass.samples {
+    let mean = match (pass.samples, old) {
         // x / 1 = x exactly: one sample needs no division.
-        Samples::All(1) => sum,
-        Samples::All(n) => sum / V::splat(f64::from(n)),
-        Samples::More { have, total } => {
+        (Samples::All(1), _) => sum,
+        (Samples::More { have, total }, Some(old)) => {
             // Each pixel folds in the f32 mean it already had.
-            let old =
-                V3::from_fn(|k| Vec3::from_slice(pixel(out.rgb, cols[k.min(last)])).as_dvec3());
+            let old = V3::from_fn(|k| DVec3::from(old[k].map(f64::from)));
             (old * V::splat(f64::from(have)) + sum) / V::splat(f64::from(total))
         }
+        (Samples::All(n), _) | (Samples::More { total: n, .. }, None) => {
+            sum / V::splat(f64::from(n))
+        }
     };
-    let (x, y, z) = (mean.x.array(), mean.y.array(), mean.z.array());
-    for (lane, &col) in cols.iter().enumerate() {
-        let m = [x[lane] as f32, y[lane] as f32, z[lane] as f32];
-        stats.non_finite += m.iter().filter(|v| !v.is_finite()).count() as u64;
-        out.rgb[3 * col as usize..3 * col as usize + 3].copy_from_slice(&finite(m));
-    }
-    stats.samples += u64::from(end - first) * cols.len() as u64;
+    finish(mean, px, &mut means.rgb, stats);
+    stats.samples += u64::from(end - first) * u64::from(px.valid.count_ones());
+    means
 }
 
-fn pixel(rgb: &[f32], col: u32) -> &[f32] {
-    &rgb[3 * col as usize..3 * col as usize + 3]
+/// Each lane's mean as f32. When every value is within ±f32::MAX (the usual case, checked in
+/// the vector) the conversion cannot overflow or give NaN, and `finite` would change nothing.
+#[inline(always)]
+fn finish<V: Lanes>(mean: V3<V>, px: &Pixels, rgb: &mut [[f32; 3]; 16], stats: &mut RowStats) {
+    let (max, min) = (
+        V::splat(f64::from(f32::MAX)),
+        V::splat(-f64::from(f32::MAX)),
+    );
+    let within = |v: V| v.le(max).and(min.le(v));
+    let tame = within(mean.x).and(within(mean.y)).and(within(mean.z));
+    let mut c = [[0f32; 16]; 3];
+    mean.x.store_f32(&mut c[0]);
+    mean.y.store_f32(&mut c[1]);
+    mean.z.store_f32(&mut c[2]);
+    let tame = tame.bits() & px.valid == px.valid;
+    for lane in px.lanes() {
+        let m = &mut rgb[lane];
+        *m = [c[0][lane], c[1][lane], c[2][lane]];
+        if !tame {
+            stats.non_finite += m.iter().filter(|v| !v.is_finite()).count() as u64;
+            *m = finite(*m);
+        }
+    }
 }
 
 /// Sub-pixel offsets of sample `k` for each lane's pixel (see `sample`).
 #[inline(always)]
-fn offsets<V: Lanes>(pass: &Pass, index: &impl Fn(usize) -> u64, k: u32) -> (V, V) {
-    let f = pass.frame;
-    let pick = |i: usize| match (pass.samples, pass.settings.sampler) {
-        (Samples::More { .. }, _) => sample::r2(f, index(i), k),
-        (Samples::All(n), Sampler::Stratified) => sample::offset(f, index(i), k, n),
-        (Samples::All(_), Sampler::Random) => sample::independent(f, index(i), k),
-    };
-    if let Samples::All(1) = pass.samples {
-        // The talk's image: one ray through the pixel centre, whatever the sampler.
+fn offsets<V: Lanes>(pattern: Pattern, seeds: &[Seed; 16], k: u32) -> (V, V) {
+    if pattern == Pattern::Centre {
         return (V::splat(0.5), V::splat(0.5));
     }
     let (mut u, mut v) = ([0.0; 16], [0.0; 16]);
     for i in 0..V::N {
-        (u[i], v[i]) = pick(i);
+        (u[i], v[i]) = seeds[i].offset(pattern, k);
     }
     (V::load(&u), V::load(&v))
 }
 
 #[inline(always)]
-fn eye_directions<V: Lanes>(pass: &Pass, row: u32, col: V, u: V, v: V) -> V3<V> {
+fn eye_directions<V: Lanes>(pass: &Pass, row: V, col: V, u: V, v: V) -> V3<V> {
     let s = pass.settings;
-    let (x, y) = screen_points(V::splat(f64::from(row)), col, u, v, s.width, s.height);
+    let (x, y) = screen_points(row, col, u, v, s.width, s.height);
     pass.camera.directions(x, y)
 }
 
@@ -188,7 +289,7 @@ pub(super) fn depth<V: Lanes>(pass: &Pass, row: u32, out: &mut [f32]) {
         let col = V::from_fn(|k| (first + k.min(n - 1)) as f64);
         let rays = Rays {
             origin: V3::splat(pass.camera.origin),
-            dir: eye_directions(pass, row, col, half, half),
+            dir: eye_directions(pass, V::splat(f64::from(row)), col, half, half),
             leaving: V::splat(-1.0),
         };
         let hit = pass
@@ -204,4 +305,33 @@ pub(super) fn depth<V: Lanes>(pass: &Pass, row: u32, out: &mut [f32]) {
             };
         }
     }
+}
+
+/// Traces arbitrary rays, each lane with its own origin and the object it leaves (tests and
+/// tools); colours into `out`. Returns the rays cast.
+#[inline(always)]
+pub(super) fn rays<V: Lanes>(
+    world: &World,
+    rays: &[Ray],
+    max_depth: u32,
+    out: &mut [DVec3],
+) -> u64 {
+    let mut cast = 0;
+    for (chunk, out) in rays.chunks(V::N).zip(out.chunks_mut(V::N)) {
+        let at = |k: usize| chunk[k.min(chunk.len() - 1)];
+        let eye = Eye {
+            rays: Rays {
+                origin: V3::from_fn(|k| at(k).origin),
+                dir: V3::from_fn(|k| at(k).dir),
+                leaving: V::from_fn(|k| at(k).leaving.map_or(-1.0, |o| o as f64)),
+            },
+            active: V::M::first(chunk.len()),
+            from_origin: None,
+        };
+        let c = shade::trace_packet(world, &eye, max_depth, &mut cast);
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = c.lane(k);
+        }
+    }
+    cast
 }

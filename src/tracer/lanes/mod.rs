@@ -55,6 +55,8 @@ pub trait Lanes:
     fn load(x: &[f64]) -> Self;
     /// Lanes into `out[..N]`.
     fn store(self, out: &mut [f64]);
+    /// Lanes rounded to f32 (to nearest, as `as f32`) into `out[..N]`.
+    fn store_f32(self, out: &mut [f32]);
     fn sqrt(self) -> Self;
     /// |self| with the sign of `s`.
     fn copysign(self, s: Self) -> Self;
@@ -188,6 +190,11 @@ impl<L: Lanes> Lanes for Pair<L> {
         self.1.store(&mut out[L::N..]);
     }
     #[inline(always)]
+    fn store_f32(self, out: &mut [f32]) {
+        self.0.store_f32(out);
+        self.1.store_f32(&mut out[L::N..]);
+    }
+    #[inline(always)]
     fn sqrt(self) -> Self {
         Pair(self.0.sqrt(), self.1.sqrt())
     }
@@ -298,6 +305,10 @@ impl Lanes for F64x1 {
     #[inline(always)]
     fn store(self, out: &mut [f64]) {
         out[0] = self.0;
+    }
+    #[inline(always)]
+    fn store_f32(self, out: &mut [f32]) {
+        out[0] = self.0 as f32;
     }
     #[inline(always)]
     fn sqrt(self) -> Self {

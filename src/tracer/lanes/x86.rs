@@ -107,6 +107,11 @@ impl Lanes for F64x4 {
         unsafe { _mm256_storeu_pd(out.as_mut_ptr(), self.0) }
     }
     #[inline(always)]
+    fn store_f32(self, out: &mut [f32]) {
+        assert!(out.len() >= 4);
+        unsafe { _mm_storeu_ps(out.as_mut_ptr(), _mm256_cvtpd_ps(self.0)) }
+    }
+    #[inline(always)]
     fn sqrt(self) -> Self {
         unsafe { F64x4(_mm256_sqrt_pd(self.0)) }
     }
@@ -224,6 +229,11 @@ impl Lanes for F64x8 {
         unsafe { _mm512_storeu_pd(out.as_mut_ptr(), self.0) }
     }
     #[inline(always)]
+    fn store_f32(self, out: &mut [f32]) {
+        assert!(out.len() >= 8);
+        unsafe { _mm256_storeu_ps(out.as_mut_ptr(), _mm512_cvtpd_ps(self.0)) }
+    }
+    #[inline(always)]
     fn sqrt(self) -> Self {
         unsafe { F64x8(_mm512_sqrt_pd(self.0)) }
     }
@@ -332,6 +342,12 @@ fn check_width<V: Lanes>(values: &[f64]) {
                     let picked = V::select(wide, a, b).lane(k);
                     assert!(same(picked, F64x1::select(scalar(x, y), x, y).0));
                 }
+            }
+            let (mut wide, mut one) = ([0f32; 16], [0f32; 1]);
+            a.store_f32(&mut wide);
+            for (k, w) in wide.iter().enumerate().take(V::N) {
+                F64x1(a.lane(k)).store_f32(&mut one);
+                assert!(w.to_bits() == one[0].to_bits() || one[0].is_nan());
             }
             // min and max are used only where no NaN can occur.
             for k in (0..V::N).filter(|&k| !a.lane(k).is_nan() && !b.lane(k).is_nan()) {

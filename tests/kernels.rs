@@ -1,0 +1,289 @@
+//! Every lane width against the scalar kernel, bit for bit: random rays (from outside, starting
+//! on surfaces, inside spheres, grazing spheres, parallel to planes) through random scenes with
+//! every light kind, and whole frames from the binary with the widest kernel and with
+//! `RAYREEL_KERNEL=scalar`.
+
+mod common;
+
+use common::{run_in, scratch, stderr};
+use glam::DVec3;
+use rayreel::scene::Shape;
+use rayreel::sequence::{self, Overrides};
+use rayreel::tracer::intersect::Ray;
+use rayreel::tracer::{Kernel, World};
+use std::path::Path;
+
+/// A small deterministic generator (xorshift64*), so failures reproduce.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+    fn pick<'a, T>(&mut self, from: &'a [T]) -> &'a T {
+        &from[(self.next() * from.len() as f64) as usize % from.len()]
+    }
+    fn vec(&mut self, lo: f64, hi: f64) -> DVec3 {
+        DVec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
+    }
+    fn unit(&mut self) -> DVec3 {
+        loop {
+            let v = self.vec(-1.0, 1.0);
+            if v.length() > 0.1 {
+                return v.normalize();
+            }
+        }
+    }
+}
+
+fn triple(v: DVec3) -> String {
+    format!("[{}, {}, {}]", v.x, v.y, v.z)
+}
+
+/// A scene of `spheres` spheres (a hierarchy from 12 on) and `planes` planes, with materials
+/// mixing whole, fractional, zero and huge exponents and mirrors, and every light kind.
+fn scene(rng: &mut Rng, spheres: usize, planes: usize) -> String {
+    let mut s = String::from("objects:\n");
+    let material = |rng: &mut Rng| {
+        format!(
+            "{{ ambient: {}, diffuse: {}, specular: {}, shininess: {}, reflection: {} }}",
+            triple(rng.vec(0.0, 0.2)),
+            triple(rng.vec(0.0, 1.0)),
+            triple(rng.vec(0.0, 1.0)),
+            rng.pick(&[0.0, 1.0, 10.0, 37.5, 100.0, 101.0, 400.0, 1e5]),
+            rng.pick(&[0.0, 0.3, 0.5, 1.0]),
+        )
+    };
+    for _ in 0..spheres {
+        let (c, r) = (rng.vec(-3.0, 3.0), rng.range(0.05, 1.2));
+        s += &format!(
+            "  - sphere: {{ center: {}, radius: {r}, material: {} }}\n",
+            triple(c),
+            material(rng)
+        );
+    }
+    for _ in 0..planes {
+        let (p, n) = (rng.vec(-3.0, 3.0), rng.unit());
+        s += &format!(
+            "  - plane: {{ point: {}, normal: {}, material: {} }}\n",
+            triple(p),
+            triple(n),
+            material(rng)
+        );
+    }
+    let i = |rng: &mut Rng| {
+        format!(
+            "ambient: {}, diffuse: {}, specular: {}",
+            triple(rng.vec(0.0, 1.0)),
+            triple(rng.vec(0.0, 1.0)),
+            triple(rng.vec(0.0, 1.0))
+        )
+    };
+    s += &format!(
+        "lights:\n  - point: {{ position: {}, {} }}\n  - directional: {{ direction: {}, {} }}\n",
+        triple(rng.vec(-6.0, 6.0)),
+        i(rng),
+        triple(rng.unit()),
+        i(rng)
+    );
+    let inner = rng.range(0.0, 40.0);
+    for outer in [inner, inner + 20.0] {
+        s += &format!(
+            "  - spot: {{ position: {}, direction: {}, inner_angle: {inner}, outer_angle: {outer}, {} }}\n",
+            triple(rng.vec(-6.0, 6.0)),
+            triple(rng.unit()),
+            i(rng)
+        );
+    }
+    s += &format!("  - ambient: {{ color: {} }}\n", triple(rng.vec(0.0, 0.3)));
+    s + "camera: { position: [0, 0, 10], look_at: [0, 0, 0] }\n"
+}
+
+/// Rays of every awkward kind for the scene's objects.
+fn rays(rng: &mut Rng, world: &World, n: usize) -> Vec<Ray> {
+    let objects = &world.scene.objects;
+    let mut out = Vec::with_capacity(n);
+    while out.len() < n {
+        let i = (rng.next() * objects.len() as f64) as usize % objects.len();
+        let kind = (rng.next() * 6.0) as usize;
+        let ray = match (objects[i].shape, kind) {
+            // From anywhere, in any direction.
+            (_, 0) => Ray {
+                origin: rng.vec(-8.0, 8.0),
+                dir: rng.unit(),
+                leaving: None,
+            },
+            // Starting on a sphere, heading in or out.
+            (Shape::Sphere { center, radius }, 1) => {
+                let n = rng.unit();
+                let d = rng.unit();
+                Ray {
+                    origin: center + radius * n,
+                    dir: d,
+                    leaving: Some(i),
+                }
+            }
+            // Inside a sphere.
+            (Shape::Sphere { center, radius }, 2) => Ray {
+                origin: center + rng.range(0.0, 0.99) * radius * rng.unit(),
+                dir: rng.unit(),
+                leaving: None,
+            },
+            // Grazing a sphere: along a tangent through a surface point.
+            (Shape::Sphere { center, radius }, 3) => {
+                let n = rng.unit();
+                let t = n.cross(rng.unit()).normalize();
+                let p = center + radius * n;
+                Ray {
+                    origin: p - rng.range(0.5, 5.0) * t,
+                    dir: t,
+                    leaving: None,
+                }
+            }
+            // Parallel to a plane, above it or in it.
+            (Shape::Plane { point, normal }, 4) => {
+                let d = normal.cross(rng.unit()).normalize();
+                let lift = *rng.pick(&[0.0, 1e-9, 0.3]);
+                Ray {
+                    origin: point + lift * normal + rng.vec(-2.0, 2.0).reject_from(normal),
+                    dir: d,
+                    leaving: (lift == 0.0).then_some(i),
+                }
+            }
+            // Starting on a plane.
+            (Shape::Plane { point, normal }, 5) => Ray {
+                origin: point + rng.vec(-2.0, 2.0).reject_from(normal),
+                dir: rng.unit(),
+                leaving: Some(i),
+            },
+            _ => continue,
+        };
+        out.push(ray);
+    }
+    out
+}
+
+fn same(a: DVec3, b: DVec3) -> bool {
+    let bits = |v: DVec3| {
+        v.to_array()
+            .map(|x| if x.is_nan() { u64::MAX } else { x.to_bits() })
+    };
+    bits(a) == bits(b)
+}
+
+#[test]
+fn every_width_traces_every_ray_as_the_scalar_kernel_does() {
+    let wide: Vec<Kernel> = Kernel::ALL
+        .into_iter()
+        .filter(|k| *k != Kernel::Scalar && k.supported())
+        .collect();
+    if wide.is_empty() {
+        eprintln!("SKIPPED: this CPU has only the scalar kernel");
+        return;
+    }
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    for (case, (spheres, planes)) in [(3, 1), (6, 2), (1, 0), (0, 2), (40, 1), (200, 2)]
+        .into_iter()
+        .enumerate()
+    {
+        let text = scene(&mut rng, spheres, planes);
+        let seq = sequence::parse(Path::new("random.yaml"), &text, &Overrides::default())
+            .unwrap_or_else(|e| panic!("{e}\n{text}"));
+        let world = World::new(seq.scene.clone());
+        // Not a multiple of any width, so the last packet has idle lanes.
+        let rays = rays(&mut rng, &world, 1003);
+        for depth in [1, 3, 6] {
+            let (want, cast) = Kernel::Scalar.trace(&world, &rays, depth);
+            for &k in &wide {
+                let (got, got_cast) = k.trace(&world, &rays, depth);
+                for (i, (a, b)) in want.iter().zip(&got).enumerate() {
+                    assert!(
+                        same(*a, *b),
+                        "case {case} depth {depth} {}: ray {i} {:?}: {a} vs {b}",
+                        k.name(),
+                        rays[i]
+                    );
+                }
+                assert_eq!(cast, got_cast, "case {case} depth {depth} {}", k.name());
+            }
+        }
+    }
+}
+
+/// Renders `args` with every kernel this CPU has; every output must equal the scalar one.
+fn every_kernel_equals_scalar(dir: &Path, name: &str, args: &[&str]) {
+    let mut outputs = Vec::new();
+    for kernel in Kernel::ALL
+        .iter()
+        .filter(|k| k.supported())
+        .map(|k| k.name())
+    {
+        let out_dir = format!("{name}-{kernel}");
+        let pattern = format!("{out_dir}/f_####.exr");
+        let mut all = vec!["render", "seq.yaml", "-q", "--exr-precision", "float", "-o"];
+        all.push(&pattern);
+        all.extend(args);
+        let out = common::bin()
+            .args(&all)
+            .current_dir(dir)
+            .env("RAYREEL_KERNEL", kernel)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+        outputs.push(dir.join(out_dir));
+    }
+    // Every channel of every frame, bit for bit (the headers hold nothing of the kernel).
+    let frames = common::files(&outputs[0]);
+    for (f, other) in outputs[1..]
+        .iter()
+        .flat_map(|o| frames.iter().map(move |f| (f, o)))
+    {
+        let read = |dir: &Path| {
+            let img = exr::prelude::read_all_flat_layers_from_file(dir.join(f)).unwrap();
+            let layer = &img.layer_data[0];
+            let channels: Vec<(String, Vec<u32>)> = layer
+                .channel_data
+                .list
+                .iter()
+                .map(|c| {
+                    let bits = match &c.sample_data {
+                        exr::image::FlatSamples::F32(v) => v.iter().map(|x| x.to_bits()).collect(),
+                        other => panic!("{f}: {} is not f32: {other:?}", c.name),
+                    };
+                    (c.name.to_string(), bits)
+                })
+                .collect();
+            channels
+        };
+        assert!(
+            read(&outputs[0]) == read(other),
+            "{name}: {f} differs in {}",
+            other.display()
+        );
+    }
+}
+
+#[test]
+fn frames_from_every_kernel_equal_the_scalar_kernels() {
+    let tmp = scratch("kernels");
+    let talk = std::fs::read_to_string(common::repo().join("sequences/talk.yaml")).unwrap();
+    std::fs::write(tmp.join("seq.yaml"), talk).unwrap();
+    every_kernel_equals_scalar(&tmp, "talk", &["--size", "333x187", "--depth"]);
+    every_kernel_equals_scalar(&tmp, "final", &["--size", "161x90", "--quality", "final"]);
+    every_kernel_equals_scalar(&tmp, "grid", &["--size", "97x55", "--samples", "9"]);
+    let mut rng = Rng(7);
+    let field = scene(&mut rng, 60, 1).replace(
+        "camera: { position: [0, 0, 10]",
+        "render: { max_depth: 4 }\ncamera: { position: [0, 0, 10]",
+    );
+    std::fs::write(tmp.join("seq.yaml"), field).unwrap();
+    every_kernel_equals_scalar(&tmp, "field", &["--size", "130x70", "--samples", "5"]);
+    let out = run_in(&tmp, &["check", "seq.yaml"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+}
