@@ -58,7 +58,53 @@ pub fn encode(
         .write()
         .to_buffered(&mut out)
         .map_err(|e| e.to_string())?;
-    Ok(out.into_inner())
+    let mut bytes = out.into_inner();
+    sort_attributes(&mut bytes)?;
+    Ok(bytes)
+}
+
+/// The exr crate writes custom attributes in hash-map order, which differs from process to
+/// process; same inputs must give the same bytes, so the header's attributes are put in name
+/// order. The header keeps its length, so the offset table behind it stays valid.
+fn sort_attributes(bytes: &mut [u8]) -> std::result::Result<(), String> {
+    let spans = attribute_spans(bytes).ok_or("the EXR header could not be read back")?;
+    let (start, end) = match (spans.first(), spans.last()) {
+        (Some(first), Some(last)) => (first.0, last.1),
+        _ => return Ok(()),
+    };
+    let name = |s: usize| bytes[s..].split(|&b| b == 0).next().unwrap_or_default();
+    let mut sorted = spans;
+    sorted.sort_by(|a, b| name(a.0).cmp(name(b.0)));
+    let header: Vec<u8> = sorted
+        .iter()
+        .flat_map(|&(s, e)| bytes[s..e].to_vec())
+        .collect();
+    bytes[start..end].copy_from_slice(&header);
+    Ok(())
+}
+
+/// Byte ranges of the header's attributes (name, type, size, value) of a single-part file.
+fn attribute_spans(bytes: &[u8]) -> Option<Vec<(usize, usize)>> {
+    let until_nul = |from: usize| -> Option<usize> {
+        Some(from + bytes.get(from..)?.iter().position(|&b| b == 0)?)
+    };
+    let mut spans = Vec::new();
+    let mut at = 8; // magic number and version
+    loop {
+        let name_end = until_nul(at)?;
+        if name_end == at {
+            return Some(spans);
+        }
+        let type_end = until_nul(name_end + 1)?;
+        let size = bytes.get(type_end + 1..type_end + 5)?;
+        let size = i32::from_le_bytes(size.try_into().ok()?);
+        let end = type_end + 5 + usize::try_from(size).ok()?;
+        if end > bytes.len() {
+            return None;
+        }
+        spans.push((at, end));
+        at = end;
+    }
 }
 
 /// fps as a fraction, exact for whole and common NTSC-style rates.
