@@ -4,6 +4,7 @@ mod render;
 
 use crate::Error;
 use crate::cli::{BenchArgs, CheckArgs, Cli, Command, MeasureArgs, PreviewArgs};
+use crate::console;
 use crate::output;
 use crate::scene::{Light, Shape};
 use crate::sequence::{self, Overrides, Sequence};
@@ -51,19 +52,17 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
     }
     let plot_file = dir.join(format!("{}_path.png", seq.name));
     preview::write_png(&plot_file, &plot).map_err(Error::Failed)?;
-    println!("{}", plot_file.display());
+    out(&format!("{}\n", plot_file.display()))?;
     let (sheet, _) =
         preview::contact_sheet(&seq, &frames, preview::TILE_WIDTH).map_err(Error::Failed)?;
     let sheet_file = dir.join(format!("{}_sheet.png", seq.name));
     preview::write_png(&sheet_file, &sheet).map_err(Error::Failed)?;
-    println!("{}", sheet_file.display());
-    Ok(())
+    out(&format!("{}\n", sheet_file.display()))
 }
 
 fn check(args: CheckArgs) -> Result<(), Error> {
     let seq = sequence::load(&args.file, &Overrides::default())?;
-    print!("{}", summary(&args.file.display().to_string(), &seq));
-    Ok(())
+    out(&summary(&args.file.display().to_string(), &seq))
 }
 
 /// The one-screen description `rayreel check` prints.
@@ -167,7 +166,7 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
         eprintln!("  {line}")
     })
     .map_err(Error::Failed)?;
-    print!("{}", report.table());
+    out(&report.table())?;
     for (name, text) in [
         ("measure.csv", report.csv()),
         ("measure.json", report.json()),
@@ -187,5 +186,14 @@ fn bench(args: BenchArgs) -> Result<(), Error> {
         only: args.only,
         quick: args.quick,
     };
-    crate::bench::run(&options, &mut |line| println!("{line}")).map_err(Error::Failed)
+    // A reader that has gone ends the output, not the benchmark's own error reporting.
+    crate::bench::run(&options, &mut |line| {
+        let _ = console::print(&format!("{line}\n"));
+    })
+    .map_err(Error::Failed)
+}
+
+/// Text on stdout; a closed stdout is a normal end (see `console::print`).
+pub(crate) fn out(text: &str) -> Result<(), Error> {
+    console::print(text).map_err(Error::Failed)
 }

@@ -1,6 +1,7 @@
 //! `render` and `status`: the same job description (sequence, overrides, frames, shard,
 //! format) either rendered or only inspected.
 
+use super::out;
 use crate::Error;
 use crate::claim::Claims;
 use crate::cli::{JobArgs, ProgressFormat, RenderArgs, StatusArgs, resolve_shard};
@@ -98,8 +99,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         .as_ref()
         .map(|f| plan::plan(&seq, &frames, f, args.force));
     if args.dry_run {
-        print_dry_run(plan.as_ref(), &frames);
-        return Ok(());
+        return print_dry_run(plan.as_ref(), &frames);
     }
     let tasks = tasks(&frames, plan.as_ref(), stream.is_some());
     let threads = match args.threads {
@@ -224,14 +224,15 @@ fn cooperate(mut job: Job, frames: &[u64], progress: &mut Progress) -> Result<Ou
     }
 }
 
-fn print_dry_run(plan: Option<&Plan>, frames: &[u64]) {
-    match plan {
-        Some(plan) => {
-            println!("{}", plan.summary());
-            println!("would render: {}", plan::compress(&plan.to_render()));
-        }
-        None => println!("would stream frames: {}", plan::compress(frames)),
-    }
+fn print_dry_run(plan: Option<&Plan>, frames: &[u64]) -> Result<(), Error> {
+    out(&match plan {
+        Some(plan) => format!(
+            "{}\nwould render: {}\n",
+            plan.summary(),
+            plan::compress(&plan.to_render())
+        ),
+        None => format!("would stream frames: {}\n", plan::compress(frames)),
+    })
 }
 
 /// Every selected frame when streaming (files written only where the plan says), otherwise
@@ -342,7 +343,9 @@ pub fn status(args: StatusArgs) -> Result<(), Error> {
             lines.push(format!("  {label:<11} {}", plan::compress(&list)));
         }
     }
-    println!("{}", lines.join("\n"));
+    // A closed stdout ends the listing, not the verdict: the exit code still says whether
+    // every frame is up to date.
+    out(&format!("{}\n", lines.join("\n")))?;
     let incomplete = plan
         .frames
         .iter()
