@@ -2,6 +2,7 @@
 //! otherwise (so farm wrappers can follow), one JSON object per frame event with
 //! `--progress json`, nothing with `--quiet`. stdout is never touched.
 
+use crate::console::printable;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
@@ -61,18 +62,18 @@ impl Progress {
     pub fn note(&self, text: &str) {
         match &self.mode {
             Mode::Quiet => {}
-            Mode::Lines => eprintln!("{text}"),
+            Mode::Lines => eprintln!("{}", printable(text)),
             Mode::Json => eprintln!("{{\"event\": \"note\", \"text\": {}}}", quote(text)),
-            Mode::Bar(bar) => bar.println(text),
+            Mode::Bar(bar) => bar.println(printable(text)),
         }
     }
 
     /// A warning: shown even with `--quiet`.
     pub fn warn(&self, text: &str) {
         match &self.mode {
-            Mode::Bar(bar) => bar.println(text),
+            Mode::Bar(bar) => bar.println(printable(text)),
             Mode::Json => eprintln!("{{\"event\": \"warning\", \"text\": {}}}", quote(text)),
-            _ => eprintln!("{text}"),
+            _ => eprintln!("{}", printable(text)),
         }
     }
 
@@ -91,15 +92,18 @@ impl Progress {
         match &self.mode {
             Mode::Quiet => {}
             Mode::Lines => eprintln!(
-                "frame {n}/{} written {destination} ({seconds:.2} s, {} of {} done)",
-                self.sequence_frames, self.done, self.total
+                "frame {n}/{} written {} ({seconds:.2} s, {} of {} done)",
+                self.sequence_frames,
+                printable(destination),
+                self.done,
+                self.total
             ),
             Mode::Json => eprintln!(
                 "{{\"event\": \"frame\", \"frame\": {n}, \"path\": {}, \"status\": \"written\", \"seconds\": {seconds:.4}}}",
                 quote(destination)
             ),
             Mode::Bar(bar) => {
-                bar.set_message(destination.to_string());
+                bar.set_message(printable(destination).into_owned());
                 bar.inc(1);
             }
         }

@@ -79,3 +79,81 @@ fn a_closed_stdout_is_a_normal_end() {
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
 }
+
+const STILL: &str = "render: { width: 32, height: 18 }
+camera: { position: [0, 0, 1], look_at: [0, 0, 0] }
+objects:
+  - sphere: { center: [0, 0, -1], radius: 0.5, material: { diffuse: [1, 0, 0] } }
+lights:
+  - point: { position: [5, 5, 5], diffuse: [1, 1, 1], specular: [1, 1, 1] }
+";
+
+/// `check` on `yaml` written to `name` in `dir`.
+fn check(dir: &Path, name: &str, yaml: &str) -> std::process::Output {
+    std::fs::write(dir.join(name), yaml).unwrap();
+    run_in(dir, &["check", name])
+}
+
+#[test]
+fn messages_read_well_whatever_the_file_holds() {
+    let tmp = scratch("messages");
+    let out = check(&tmp, "bom.yaml", &format!("\u{feff}{STILL}"));
+    assert!(out.status.success(), "a byte-order mark: {}", stderr(&out));
+
+    let keys = "  keyframes:\n    - { time: 0 }\n";
+    let tagged = format!("{STILL}timeline:\n  fps: !!float \"24\"\n  duration: 1\n{keys}");
+    let out = check(&tmp, "tagged.yaml", &tagged);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("tagged.yaml:8:8: timeline.fps:")
+            && stderr(&out).contains("write it plainly, without tag or quotes: `fps: 24`"),
+        "{}",
+        stderr(&out)
+    );
+
+    let tiny = format!("{STILL}timeline:\n  duration: 1e-300\n{keys}");
+    let out = check(&tmp, "tiny.yaml", &tiny);
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        stderr(&out),
+        "rayreel: tiny.yaml:8:13: timeline.duration: duration × fps must give 1 to 10000000 frames (got 1e-300 s × 24 fps = 0 frames)\n"
+    );
+}
+
+#[test]
+fn control_characters_from_a_file_never_reach_the_terminal() {
+    let tmp = scratch("escapes");
+    let hostile = "\\e[31mred/\\e]0;owned\\a\\e[2Jf_####";
+    let yaml = format!("{STILL}output: \"{hostile}.png\"\n");
+    let clean = |o: &std::process::Output| {
+        for bytes in [&o.stdout, &o.stderr] {
+            assert!(
+                !bytes.iter().any(|&b| b == 0x1b || b == 0x07),
+                "{}",
+                String::from_utf8_lossy(bytes)
+            );
+        }
+    };
+    let out = check(&tmp, "esc.yaml", &yaml);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("\\u{1b}[31mred/"));
+    clean(&out);
+    for args in [
+        vec!["render", "esc.yaml"],
+        vec!["render", "esc.yaml", "--dry-run"],
+        vec!["status", "esc.yaml"],
+    ] {
+        let out = run_in(&tmp, &args);
+        assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+        clean(&out);
+    }
+    let bad = format!("{STILL}output: \"{hostile}.txt\"\n");
+    let out = check(&tmp, "bad.yaml", &bad);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("(got `\\u{1b}[31mred/"),
+        "{}",
+        stderr(&out)
+    );
+    clean(&out);
+}

@@ -4,7 +4,7 @@ mod render;
 
 use crate::Error;
 use crate::cli::{BenchArgs, CheckArgs, Cli, Command, MeasureArgs, PreviewArgs};
-use crate::console;
+use crate::console::{self, printable};
 use crate::output;
 use crate::scene::{Light, Shape};
 use crate::sequence::{self, Overrides, Sequence};
@@ -48,21 +48,21 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
         .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
     let (plot, warnings) = preview::path_plot(&seq);
     for w in &warnings {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", printable(w));
     }
     let plot_file = dir.join(format!("{}_path.png", seq.name));
     preview::write_png(&plot_file, &plot).map_err(Error::Failed)?;
-    out(&format!("{}\n", plot_file.display()))?;
+    out(&format!("{}\n", shown(&plot_file)))?;
     let (sheet, _) =
         preview::contact_sheet(&seq, &frames, preview::TILE_WIDTH).map_err(Error::Failed)?;
     let sheet_file = dir.join(format!("{}_sheet.png", seq.name));
     preview::write_png(&sheet_file, &sheet).map_err(Error::Failed)?;
-    out(&format!("{}\n", sheet_file.display()))
+    out(&format!("{}\n", shown(&sheet_file)))
 }
 
 fn check(args: CheckArgs) -> Result<(), Error> {
     let seq = sequence::load(&args.file, &Overrides::default())?;
-    out(&summary(&args.file.display().to_string(), &seq))
+    out(&summary(&shown(&args.file), &seq))
 }
 
 /// The one-screen description `rayreel check` prints.
@@ -120,7 +120,7 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
         t.frame_count,
         t.fps,
         t.frame_count as f64 / t.fps,
-        seq.output
+        printable(&seq.output)
     )
 }
 
@@ -160,7 +160,7 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
     eprintln!(
         "measuring frame {} of {} at {w}x{h}",
         args.frame,
-        args.file.display()
+        shown(&args.file)
     );
     let report = crate::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
         eprintln!("  {line}")
@@ -175,7 +175,7 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
         let path = dir.join(name);
         output::atomic::write_atomic(&path, text.as_bytes())
             .map_err(|e| Error::Failed(format!("{}: cannot write: {e}", path.display())))?;
-        eprintln!("wrote {}", path.display());
+        eprintln!("wrote {}", shown(&path));
     }
     Ok(())
 }
@@ -191,6 +191,11 @@ fn bench(args: BenchArgs) -> Result<(), Error> {
         let _ = console::print(&format!("{line}\n"));
     })
     .map_err(Error::Failed)
+}
+
+/// A path as the terminal may show it (see `console::printable`).
+pub(crate) fn shown(path: &Path) -> String {
+    printable(&path.display().to_string()).into_owned()
 }
 
 /// Text on stdout; a closed stdout is a normal end (see `console::print`).

@@ -1,7 +1,7 @@
 //! `render` and `status`: the same job description (sequence, overrides, frames, shard,
 //! format) either rendered or only inspected.
 
-use super::out;
+use super::{out, shown};
 use crate::Error;
 use crate::claim::Claims;
 use crate::cli::{JobArgs, ProgressFormat, RenderArgs, StatusArgs, resolve_shard};
@@ -322,7 +322,7 @@ pub fn status(args: StatusArgs) -> Result<(), Error> {
     let files = file_sink(&seq, &args.job, false)?;
     let plan = plan::plan(&seq, &frames, &files, false);
     let dir = directory(&files.pattern);
-    let mut lines = vec![format!("{}: {}", dir.display(), plan.status_line())];
+    let mut lines = vec![format!("{}: {}", shown(&dir), plan.status_line())];
     for (label, pick) in [
         (
             "up to date",

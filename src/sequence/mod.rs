@@ -158,6 +158,9 @@ fn too_large(file: &Path, len: u64) -> LoadError {
 
 /// `load` for text already in memory; `file` is only used to name things.
 pub fn parse(file: &Path, text: &str, overrides: &Overrides) -> Result<Sequence, LoadError> {
+    // Editors on Windows start UTF-8 files with a byte-order mark; libyaml would take it for
+    // the start of a second document.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     if text.len() as u64 > MAX_FILE_BYTES {
         return Err(too_large(file, text.len() as u64));
     }
@@ -208,7 +211,9 @@ fn yaml_error(file: &Path, e: &serde_yaml::Error) -> LoadError {
         "repetition limit exceeded" => {
             "aliases repeat too many nodes (repetition limit exceeded)".into()
         }
-        _ => out_of_range(&message).unwrap_or(message),
+        _ => out_of_range(&message)
+            .or_else(|| tagged_number(&message))
+            .unwrap_or(message),
     };
     LoadError::Invalid {
         file: file.to_owned(),
@@ -243,6 +248,29 @@ fn out_of_range(message: &str) -> Option<String> {
         .flat_map(|t| ["u64", "i64"].map(|e| format!("` as {t}, expected {e}")))
         .find_map(|suffix| s.strip_suffix(suffix.as_str()))?;
     Some(format!("{field}number out of range (got {s})"))
+}
+
+/// serde_yaml reads a tagged, quoted number (`fps: !!float "24"`) as a number and then refuses
+/// it for the very type it is (`invalid type: floating point `24.0`, expected f64`): say what
+/// to write instead.
+fn tagged_number(message: &str) -> Option<String> {
+    let (field, rest) = message.split_once(": invalid type: ")?;
+    let value = match rest.strip_prefix("floating point `") {
+        Some(r) => r.strip_suffix("`, expected f64")?,
+        None => {
+            let (value, expected) = rest.strip_prefix("integer `")?.split_once("`, expected ")?;
+            ["f64", "u64", "i64"].contains(&expected).then_some(value)?
+        }
+    };
+    let value = value.parse::<f64>().map_or(value.to_string(), num);
+    // `timeline.fps` → `fps: 24`; a list element (`center[1]`) → `0`.
+    let plain = match field.ends_with(']') {
+        true => value.clone(),
+        false => format!("{}: {value}", field.rsplit('.').next().unwrap_or(field)),
+    };
+    Some(format!(
+        "{field}: a tagged, quoted number such as `!!float \"{value}\"` is not read as a number; write it plainly, without tag or quotes: `{plain}`"
+    ))
 }
 
 /// Longest error message shown whole; longer ones quote some huge value from the file.
@@ -516,14 +544,38 @@ fn got(v: impl Display) -> String {
     format!("(got {v})")
 }
 
-/// `(got X)` for a number, in exponent form when plain digits would run long.
+/// `(got X)` for a number, short (see `num`).
 fn got_num(v: f64) -> String {
-    let a = v.abs();
-    if a == 0.0 || (1e-4..1e16).contains(&a) || !v.is_finite() {
-        got(v)
-    } else {
-        got(format!("{v:e}"))
+    got(num(v))
+}
+
+/// A number as messages show it: at most 6 significant digits, plain from 1e-4 up to 1e6 and
+/// in exponent form beyond (`1e-300`, never 300 digits).
+pub fn num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
     }
+    let exponent = v.abs().log10().floor() as i32;
+    if (-4..6).contains(&exponent) {
+        let decimals = (5 - exponent).max(0) as usize;
+        return trim_zeros(&format!("{v:.decimals$}")).to_string();
+    }
+    let text = format!("{v:.5e}");
+    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+    format!("{}e{exponent}", trim_zeros(mantissa))
+}
+
+/// `1.500` → `1.5`, `2.000` → `2`; whole numbers without a point stay as they are.
+fn trim_zeros(s: &str) -> &str {
+    match s.contains('.') {
+        true => s.trim_end_matches('0').trim_end_matches('.'),
+        false => s,
+    }
+}
+
+/// `[x, y, z]` with each number short (see `num`).
+fn num3(v: DVec3) -> String {
+    format!("[{}, {}, {}]", num(v.x), num(v.y), num(v.z))
 }
 
 fn number(path: &str, v: f64) -> Check<f64> {
@@ -550,7 +602,7 @@ fn vector(path: &str, v: raw::V3) -> Check<DVec3> {
 }
 
 fn fmt3(v: raw::V3) -> String {
-    format!("[{}, {}, {}]", v[0], v[1], v[2])
+    num3(DVec3::from(v))
 }
 
 fn unit(path: &str, v: raw::V3) -> Check<DVec3> {
@@ -790,7 +842,11 @@ fn spot(path: &str, s: &raw::SpotLight) -> Check<Light> {
     if inner > outer {
         return invalid(
             format!("{path}.inner_angle"),
-            format!("must not exceed outer_angle ({outer}) {}", got(inner)),
+            format!(
+                "must not exceed outer_angle ({}) {}",
+                num(outer),
+                got_num(inner)
+            ),
         );
     }
     Ok(Light::Spot {
@@ -825,7 +881,9 @@ fn check_pose(path: &str, pose: &Pose) -> Check<()> {
             format!("{path}.{field}"),
             format!(
                 "{e} (position {}, look_at {}, up {})",
-                pose.position, pose.look_at, pose.up
+                num3(pose.position),
+                num3(pose.look_at),
+                num3(pose.up)
             ),
         )
     })
@@ -842,7 +900,7 @@ fn timeline(t: &raw::Timeline, camera: Option<Pose>) -> Check<Timeline> {
     if fps == 0.0 {
         return invalid(
             "timeline.fps",
-            format!("must be greater than 0 {}", got(fps)),
+            format!("must be greater than 0 {}", got_num(fps)),
         );
     }
     let (path, natural) = match (&t.keyframes, &t.orbit) {
@@ -884,7 +942,12 @@ fn timeline(t: &raw::Timeline, camera: Option<Pose>) -> Check<Timeline> {
             "timeline.duration",
             format!(
                 "duration × fps must give 1 to {MAX_FRAMES} frames {}",
-                got(format!("{duration} s × {fps} fps = {frames} frames"))
+                got(format!(
+                    "{} s × {} fps = {} frames",
+                    num(duration),
+                    num(fps),
+                    num(frames)
+                ))
             ),
         );
     }
@@ -913,8 +976,8 @@ fn keyframes(keys: &[raw::Keyframe], camera: Option<Pose>) -> Check<Vec<Key>> {
                 format!(
                     "keyframe times must increase strictly; keyframe {} is at {} {}",
                     i - 1,
-                    prev.time,
-                    got(time)
+                    num(prev.time),
+                    got_num(time)
                 ),
             );
         }
@@ -1014,14 +1077,35 @@ fn check_every_frame(t: &Timeline) -> Check<()> {
                 path,
                 format!(
                     "frame {n} (t = {} s){between}: {e} (position {}, look_at {}, up {}, fov {})",
-                    t.time_of(n),
-                    pose.position,
-                    pose.look_at,
-                    pose.up,
-                    pose.fov
+                    num(t.time_of(n)),
+                    num3(pose.position),
+                    num3(pose.look_at),
+                    num3(pose.up),
+                    num(pose.fov)
                 ),
             );
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::num;
+
+    #[test]
+    fn numbers_in_messages_are_short() {
+        for (v, text) in [
+            (1e-300, "1e-300"),
+            (1.0 / 12.0, "0.0833333"),
+            (1280.0, "1280"),
+            (-1.3999999999999997, "-1.4"),
+            (1e101, "1e101"),
+            (123456789.0, "1.23457e8"),
+            (0.0, "0"),
+            (f64::INFINITY, "inf"),
+        ] {
+            assert_eq!(num(v), text);
+        }
+    }
 }
