@@ -7,6 +7,7 @@ pub mod claim;
 pub mod cli;
 pub mod console;
 pub mod frame;
+pub mod frameset;
 pub mod measure;
 pub mod output;
 pub mod plan;

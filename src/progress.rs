@@ -77,6 +77,11 @@ impl Progress {
         }
     }
 
+    /// Whether `frame_skipped` shows anything (one JSON line per frame).
+    pub fn reports_skipped(&self) -> bool {
+        matches!(self.mode, Mode::Json)
+    }
+
     /// A frame that needs no work (`up-to-date`) or may not be touched (`foreign`).
     pub fn frame_skipped(&self, n: u64, path: &str, status: &str) {
         if let Mode::Json = self.mode {

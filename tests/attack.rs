@@ -157,3 +157,154 @@ fn control_characters_from_a_file_never_reach_the_terminal() {
     );
     clean(&out);
 }
+
+/// `png` with each chunk's data passed through `edit` (by chunk type; `None` drops the chunk)
+/// and its CRC recomputed: a file whose checksums are all valid.
+fn edit_chunks(png: &[u8], edit: Edit) -> Vec<u8> {
+    let mut out = png[..8].to_vec();
+    let mut rest = &png[8..];
+    while rest.len() >= 12 {
+        let len = u32::from_be_bytes(rest[..4].try_into().unwrap()) as usize;
+        let kind = &rest[4..8];
+        if let Some(data) = edit(kind, rest[8..8 + len].to_vec()) {
+            let mut crc = crc32fast::Hasher::new();
+            crc.update(kind);
+            crc.update(&data);
+            out.extend((data.len() as u32).to_be_bytes());
+            out.extend(kind);
+            out.extend(&data);
+            out.extend(crc.finalize().to_be_bytes());
+        }
+        rest = &rest[12 + len..];
+    }
+    out
+}
+
+type Edit = fn(&[u8], Vec<u8>) -> Option<Vec<u8>>;
+
+/// Ways to break a frame that keep its fingerprint and every checksum valid.
+const BREAKS: [(&str, Edit); 5] = [
+    ("half the rows", |kind, data| match kind {
+        b"IDAT" => {
+            let pixels = fdeflate::decompress_to_vec(&data).unwrap();
+            Some(fdeflate::compress_to_vec(&pixels[..pixels.len() / 2]))
+        }
+        _ => Some(data),
+    }),
+    ("garbage data", |kind, data| match kind {
+        b"IDAT" => Some(data.iter().map(|b| b.wrapping_mul(31) ^ 0x5a).collect()),
+        _ => Some(data),
+    }),
+    ("no data", |kind, data| (kind != b"IDAT").then_some(data)),
+    ("1x1 header", |kind, mut data| {
+        if kind == b"IHDR" {
+            data[..8].copy_from_slice(&[0, 0, 0, 1, 0, 0, 0, 1]);
+        }
+        Some(data)
+    }),
+    ("RGBA header", |kind, mut data| {
+        if kind == b"IHDR" {
+            data[9] = 6;
+        }
+        Some(data)
+    }),
+];
+
+#[test]
+fn broken_frames_with_valid_checksums_are_not_up_to_date() {
+    let tmp = with_clean_render("broken-frames", &small());
+    let out = run_in(&tmp, &["render", "seq.yaml", "-o", "out/f_####.png", "-q"]);
+    assert!(out.status.success());
+    for (n, (what, edit)) in BREAKS.iter().enumerate() {
+        let path = tmp.join(format!("out/f_{n:04}.png"));
+        let broken = edit_chunks(&std::fs::read(&path).unwrap(), *edit);
+        std::fs::write(&path, broken).unwrap();
+        let status = run_in(&tmp, &["status", "seq.yaml", "-o", "out/f_####.png"]);
+        let text = String::from_utf8_lossy(&status.stdout);
+        assert_eq!(status.status.code(), Some(1), "{what}: {text}");
+        assert!(
+            text.contains(&format!(
+                "corrupt     {}",
+                if n == 0 {
+                    "0".to_string()
+                } else {
+                    format!("0-{n}")
+                }
+            )),
+            "{what}: {text}"
+        );
+    }
+    let out = run_in(&tmp, &["render", "seq.yaml", "-o", "out/f_####.png"]);
+    assert!(
+        stderr(&out).contains("24 frames: 19 up to date, 5 corrupt → rendering 5"),
+        "{}",
+        stderr(&out)
+    );
+    assert_same_files(&tmp.join("clean"), &tmp.join("out"));
+}
+
+/// Runs rayreel in `dir` and measures it (exit code, stderr, time, peak memory).
+fn measured(dir: &Path, args: &[&str]) -> (Run, String) {
+    use std::process::Stdio;
+    let started = std::time::Instant::now();
+    let mut child = bin()
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdout = child.stdout.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        std::io::Read::read_to_string(&mut stdout, &mut s).unwrap();
+        s
+    });
+    let run = measure(child, started, |_| {});
+    (run, reader.join().unwrap())
+}
+
+#[test]
+fn ten_million_frames_cost_what_their_selection_costs() {
+    let tmp = scratch("ten-million");
+    let yaml = format!(
+        "{STILL}timeline:\n  fps: 1000\n  duration: 10000\n  keyframes:\n    - {{ time: 0 }}\n    - {{ time: 10000, position: [1, 0, 1] }}\n"
+    );
+    std::fs::write(tmp.join("ten.yaml"), yaml).unwrap();
+    let out = run_in(&tmp, &["render", "ten.yaml", "-q", "--frames", "5,9999999"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for (args, code, needle) in [
+        (
+            vec!["status", "ten.yaml"],
+            Some(1),
+            "10000000 frames: 2 up to date, 9999998 missing\n  up to date  5,9999999\n  missing     0-4,6-9999998\n",
+        ),
+        (
+            vec![
+                "render",
+                "ten.yaml",
+                "--dry-run",
+                "--frames",
+                "0-9999999:3",
+                "--shard",
+                "2/4",
+            ],
+            Some(0),
+            "833334 frames: 1 up to date, 833333 missing → rendering 833333\nwould render: 3-9999987:12\n",
+        ),
+    ] {
+        let (run, stdout) = measured(&tmp, &args);
+        let what = format!(
+            "{args:?}: exit {:?}, {:.2} s, {} MB: {stdout}{}",
+            run.code,
+            run.seconds,
+            run.peak_kb / 1024,
+            run.stderr
+        );
+        eprintln!("{what}");
+        assert_eq!(run.code, code, "{what}");
+        assert!(stdout.ends_with(needle), "{what}");
+        // Once 473 MB: a vector of every frame number and a state for each.
+        assert!(run.peak_kb < 64 * 1024, "{what}");
+    }
+}

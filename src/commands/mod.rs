@@ -29,18 +29,21 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
     let seq = sequence::load(&args.file, &Overrides::default())?;
     let count = seq.timeline.frame_count;
     let frames = match &args.frames {
-        Some(spec) => spec
-            .frames(count)
-            .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
+        Some(spec) => {
+            let set = spec
+                .frames(count)
+                .map_err(|e| Error::Usage(format!("--frames: {e}")))?;
+            if set.len() > preview::MAX_TILES {
+                return Err(Error::Usage(format!(
+                    "--frames: {} frames; a contact sheet holds at most {}",
+                    set.len(),
+                    preview::MAX_TILES
+                )));
+            }
+            set.iter().collect()
+        }
         None => preview::evenly_spaced(count, args.tiles),
     };
-    if frames.len() as u64 > preview::MAX_TILES {
-        return Err(Error::Usage(format!(
-            "--frames: {} frames; a contact sheet holds at most {}",
-            frames.len(),
-            preview::MAX_TILES
-        )));
-    }
     let dir = args
         .out
         .unwrap_or_else(|| Path::new("frames").join(&seq.name).join("preview"));

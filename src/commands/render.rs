@@ -5,17 +5,17 @@ use super::{out, shown};
 use crate::Error;
 use crate::claim::Claims;
 use crate::cli::{JobArgs, ProgressFormat, RenderArgs, StatusArgs, resolve_shard};
+use crate::frameset::FrameSet;
 use crate::output::{self, FileFormat, pattern::Pattern, stream::StreamFormat};
 use crate::plan::{self, Plan, State};
 use crate::progress::Progress;
 use crate::schedule::{self, Files, Job, Outcome, Task};
 use crate::sequence::{self, Overrides, Sequence};
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
 /// The validated sequence and this task's frames.
-fn load(job: &JobArgs) -> Result<(Sequence, Vec<u64>), Error> {
+fn load(job: &JobArgs) -> Result<(Sequence, FrameSet), Error> {
     let overrides = Overrides {
         size: job.size,
         max_depth: job.max_depth,
@@ -30,13 +30,13 @@ fn load(job: &JobArgs) -> Result<(Sequence, Vec<u64>), Error> {
         Some(spec) => spec
             .frames(count)
             .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
-        None => (0..count).collect(),
+        None => FrameSet::range(0, count - 1, 1),
     };
     if let Some(spec) = job.shard {
         let env = |name: &str| std::env::var(name).ok();
         let (k, n) = resolve_shard(spec, job.shard_count, &env)
             .map_err(|e| Error::Usage(format!("--shard: {e}")))?;
-        frames = plan::shard(&frames, k, n);
+        frames = frames.shard(k, n);
     }
     Ok((seq, frames))
 }
@@ -65,20 +65,13 @@ fn file_sink(seq: &Sequence, job: &JobArgs, create: bool) -> Result<Files, Error
         )));
     }
     if create {
-        let dir = directory(&pattern);
+        let dir = plan::directory(&pattern.frame_path(0));
         std::fs::create_dir_all(&dir).map_err(|e| {
             Error::Failed(format!("{}: cannot create directory: {e}", dir.display()))
         })?;
         output::atomic::clean_leftovers(&dir);
     }
     Ok(Files { pattern, format })
-}
-
-fn directory(pattern: &Pattern) -> PathBuf {
-    match pattern.frame_path(0).parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    }
 }
 
 pub fn render(args: RenderArgs) -> Result<(), Error> {
@@ -131,12 +124,11 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         threads,
         claims,
     };
-    let written: Vec<u64> = job
-        .tasks
+    let mut written = FrameSet::new();
+    job.tasks
         .iter()
         .filter(|t| t.write_file)
-        .map(|t| t.frame)
-        .collect();
+        .for_each(|t| written.push(t.frame));
     let (seq, files) = (Arc::clone(&job.sequence), job.files.clone());
     let outcome = match job.claims.is_some() {
         true => cooperate(job, &frames, &mut progress),
@@ -152,12 +144,26 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
 /// After a complete run, every frame it wrote must still be there and intact: a file that
 /// vanished or was replaced meanwhile (another program, a full disk elsewhere) is reported
 /// rather than assumed done.
-fn verify(seq: &Sequence, written: &[u64], files: &Files) -> Result<(), Error> {
+fn verify(seq: &Sequence, written: &FrameSet, files: &Files) -> Result<(), Error> {
     let check = plan::plan(seq, written, files, false);
-    let bad: Vec<String> = check
-        .frames
+    let mut bad: Vec<(u64, State)> = check
+        .why
+        .into_iter()
+        .map(|(n, why)| (n, State::Corrupt(why)))
+        .collect();
+    for (set, state) in [
+        (&check.stale, State::Stale),
+        (&check.missing, State::Missing),
+        (&check.foreign, State::Foreign),
+    ] {
+        bad.extend(set.iter().map(|n| (n, state.clone())));
+    }
+    if bad.is_empty() {
+        return Ok(());
+    }
+    bad.sort_by_key(|(n, _)| *n);
+    let bad: Vec<String> = bad
         .iter()
-        .filter(|(_, s)| *s != State::UpToDate)
         .map(|(n, s)| {
             format!(
                 "{} ({})",
@@ -166,9 +172,6 @@ fn verify(seq: &Sequence, written: &[u64], files: &Files) -> Result<(), Error> {
             )
         })
         .collect();
-    if bad.is_empty() {
-        return Ok(());
-    }
     Err(Error::Failed(format!(
         "frames written by this run changed before it ended: {}; run the same command again to render them",
         bad.join(", ")
@@ -187,7 +190,7 @@ fn describe(s: &State) -> String {
 
 /// Claim mode: render what can be claimed, then keep re-planning until every frame is up to
 /// date, waiting on frames other live processes hold and taking over those whose owner died.
-fn cooperate(mut job: Job, frames: &[u64], progress: &mut Progress) -> Result<Outcome, String> {
+fn cooperate(mut job: Job, frames: &FrameSet, progress: &mut Progress) -> Result<Outcome, String> {
     let mut written = 0;
     loop {
         let outcome = schedule::run(
@@ -224,52 +227,43 @@ fn cooperate(mut job: Job, frames: &[u64], progress: &mut Progress) -> Result<Ou
     }
 }
 
-fn print_dry_run(plan: Option<&Plan>, frames: &[u64]) -> Result<(), Error> {
+fn print_dry_run(plan: Option<&Plan>, frames: &FrameSet) -> Result<(), Error> {
     out(&match plan {
-        Some(plan) => format!(
-            "{}\nwould render: {}\n",
-            plan.summary(),
-            plan::compress(&plan.to_render())
-        ),
-        None => format!("would stream frames: {}\n", plan::compress(frames)),
+        Some(plan) => format!("{}\nwould render: {}\n", plan.summary(), plan.to_render()),
+        None => format!("would stream frames: {frames}\n"),
     })
 }
 
 /// Every selected frame when streaming (files written only where the plan says), otherwise
 /// just the frames the plan renders.
-fn tasks(frames: &[u64], plan: Option<&Plan>, streaming: bool) -> Vec<Task> {
-    let Some(plan) = plan else {
-        return frames
-            .iter()
-            .map(|&frame| Task {
-                frame,
-                write_file: false,
-            })
-            .collect();
-    };
-    plan.frames
-        .iter()
-        .filter(|(_, s)| streaming || plan.renders(s))
-        .map(|(frame, s)| Task {
-            frame: *frame,
-            write_file: plan.renders(s),
-        })
-        .collect()
+fn tasks(frames: &FrameSet, plan: Option<&Plan>, streaming: bool) -> Vec<Task> {
+    let task = |frame, write_file| Task { frame, write_file };
+    match plan {
+        None => frames.iter().map(|n| task(n, false)).collect(),
+        Some(plan) if streaming => {
+            let render = plan.to_render();
+            frames.iter().map(|n| task(n, render.contains(n))).collect()
+        }
+        Some(plan) => plan.to_render().iter().map(|n| task(n, true)).collect(),
+    }
 }
 
 fn report_skipped(progress: &Progress, plan: &Plan, files: &Files) {
-    for (n, state) in &plan.frames {
-        let path = files.pattern.frame_path(*n).display().to_string();
-        match state {
-            State::UpToDate if !plan.force => progress.frame_skipped(*n, &path, "up-to-date"),
-            State::Foreign if !plan.force => {
-                progress.frame_skipped(*n, &path, "foreign");
-                progress.warn(&format!(
-                    "{path}: not written by rayreel (no fingerprint); leaving it alone (use --force to overwrite)"
-                ));
-            }
-            _ => {}
+    if plan.force {
+        return;
+    }
+    let path = |n| files.pattern.frame_path(n).display().to_string();
+    if progress.reports_skipped() {
+        for n in plan.up_to_date.iter() {
+            progress.frame_skipped(n, &path(n), "up-to-date");
         }
+    }
+    for n in plan.foreign.iter() {
+        progress.frame_skipped(n, &path(n), "foreign");
+        progress.warn(&format!(
+            "{}: not written by rayreel (no fingerprint); leaving it alone (use --force to overwrite)",
+            path(n)
+        ));
     }
 }
 
@@ -300,8 +294,7 @@ fn finish(outcome: Result<Outcome, String>, plan: Option<&Plan>) -> Result<(), E
                 return Ok(());
             }
             Err(Error::Failed(format!(
-                "frames {} were not written: files rayreel did not write are in the way (use --force to overwrite them)",
-                plan::compress(&blocked)
+                "frames {blocked} were not written: files rayreel did not write are in the way (use --force to overwrite them)"
             )))
         }
         Outcome::Interrupted { written } => Err(Error::Interrupted(format!(
@@ -321,42 +314,24 @@ pub fn status(args: StatusArgs) -> Result<(), Error> {
     let (seq, frames) = load(&args.job)?;
     let files = file_sink(&seq, &args.job, false)?;
     let plan = plan::plan(&seq, &frames, &files, false);
-    let dir = directory(&files.pattern);
+    let dir = plan::directory(&files.pattern.frame_path(0));
     let mut lines = vec![format!("{}: {}", shown(&dir), plan.status_line())];
-    for (label, pick) in [
-        (
-            "up to date",
-            &(|s: &State| *s == State::UpToDate) as &dyn Fn(&State) -> bool,
-        ),
-        ("stale", &|s: &State| *s == State::Stale),
-        ("missing", &|s: &State| *s == State::Missing),
-        ("corrupt", &|s: &State| matches!(s, State::Corrupt(_))),
-        ("foreign", &|s: &State| *s == State::Foreign),
-    ] {
-        let list: Vec<u64> = plan
-            .frames
-            .iter()
-            .filter(|(_, s)| pick(s))
-            .map(|(n, _)| *n)
-            .collect();
-        if !list.is_empty() {
-            lines.push(format!("  {label:<11} {}", plan::compress(&list)));
+    for (label, set) in plan.by_state() {
+        if !set.is_empty() {
+            lines.push(format!("  {label:<11} {set}"));
         }
     }
     // A closed stdout ends the listing, not the verdict: the exit code still says whether
     // every frame is up to date.
     out(&format!("{}\n", lines.join("\n")))?;
-    let incomplete = plan
-        .frames
-        .iter()
-        .filter(|(_, s)| *s != State::UpToDate)
-        .count();
-    if incomplete == 0 {
+    let done = plan.up_to_date.len();
+    let selected = plan.selected_count();
+    if done == selected {
         Ok(())
     } else {
         Err(Error::Incomplete(format!(
-            "{incomplete} of {} frames are not up to date",
-            plan.frames.len()
+            "{} of {selected} frames are not up to date",
+            selected - done
         )))
     }
 }

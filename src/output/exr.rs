@@ -2,7 +2,7 @@
 //! request), an optional Z channel (eye-ray distance, +inf for background, always 32-bit), ZIP
 //! compression, and header attributes for the frame number, time, fps and fingerprint.
 
-use super::{Existing, FrameMeta, fingerprint};
+use super::{Existing, Expected, FileFormat, FrameMeta, fingerprint};
 use crate::frame::Frame;
 use exr::prelude::*;
 use std::io::Cursor;
@@ -113,8 +113,9 @@ fn rational(fps: f64) -> (i32, u32) {
     ((fps * f64::from(den)).round() as i32, den)
 }
 
-/// Reads the whole file (EXR has no checksums, so decoding every block is the check).
-pub fn inspect(bytes: &[u8]) -> Existing {
+/// Reads the whole file (EXR has no checksums, so decoding every block is the check); a file
+/// with our fingerprint must also have the job's size and colour channels.
+pub fn inspect(bytes: &[u8], expected: &Expected) -> Existing {
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -122,16 +123,47 @@ pub fn inspect(bytes: &[u8]) -> Existing {
         .first_valid_layer()
         .all_attributes()
         .from_buffered(Cursor::new(bytes));
-    match image {
-        Err(e) => Existing::Corrupt(format!("unreadable EXR: {e}")),
-        Ok(image) => match image
-            .layer_data
-            .attributes
-            .other
-            .get(&Text::from(fingerprint::KEY))
-        {
-            Some(AttributeValue::Text(t)) => Existing::Ours(t.to_string()),
-            _ => Existing::Foreign,
-        },
+    let image = match image {
+        Err(e) => return Existing::Corrupt(format!("unreadable EXR: {e}")),
+        Ok(image) => image,
+    };
+    let layer = &image.layer_data;
+    let Some(AttributeValue::Text(fingerprint)) =
+        layer.attributes.other.get(&Text::from(fingerprint::KEY))
+    else {
+        return Existing::Foreign;
+    };
+    let (w, h) = (layer.size.width(), layer.size.height());
+    if (w, h) != (expected.width as usize, expected.height as usize) {
+        return Existing::Damaged {
+            fingerprint: fingerprint.to_string(),
+            why: format!(
+                "the header says {w}x{h}; this job renders {}x{}",
+                expected.width, expected.height
+            ),
+        };
     }
+    let float = matches!(
+        expected.format,
+        FileFormat::Exr {
+            precision: Precision::Float
+        }
+    );
+    let colour = |name: &str| {
+        layer.channel_data.list.iter().any(|c| {
+            c.name == *name
+                && matches!(
+                    (&c.sample_data, float),
+                    (FlatSamples::F32(_), true) | (FlatSamples::F16(_), false)
+                )
+        })
+    };
+    if !["R", "G", "B"].into_iter().all(colour) {
+        let kind = if float { "32-bit float" } else { "half" };
+        return Existing::Damaged {
+            fingerprint: fingerprint.to_string(),
+            why: format!("no {kind} R, G and B channels"),
+        };
+    }
+    Existing::Ours(fingerprint.to_string())
 }

@@ -549,11 +549,18 @@ fn got_num(v: f64) -> String {
     got(num(v))
 }
 
-/// A number as messages show it: at most 6 significant digits, plain from 1e-4 up to 1e6 and
-/// in exponent form beyond (`1e-300`, never 300 digits).
+/// A number as messages show it: exactly as written when that takes at most 6 significant
+/// digits (`0.35`, `10000000`), otherwise rounded to 6, plain from 1e-4 up to 1e6 and in
+/// exponent form beyond (`1e-300`, never 300 digits).
 pub fn num(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
+    let exact = format!("{v}");
+    let significant = exact
+        .trim_start_matches('-')
+        .replace('.', "")
+        .trim_matches('0')
+        .len();
+    if v == 0.0 || !v.is_finite() || ((1e-4..1e16).contains(&v.abs()) && significant <= 6) {
+        return exact;
     }
     let exponent = v.abs().log10().floor() as i32;
     if (-4..6).contains(&exponent) {
@@ -1102,6 +1109,8 @@ mod tests {
             (-1.3999999999999997, "-1.4"),
             (1e101, "1e101"),
             (123456789.0, "1.23457e8"),
+            (1e7, "10000000"),
+            (0.35, "0.35"),
             (0.0, "0"),
             (f64::INFINITY, "inf"),
         ] {
