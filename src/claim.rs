@@ -5,7 +5,7 @@
 //! (same host, dead pid) or silent for longer than the timeout is taken over, so a crashed
 //! machine leaves no holes.
 
-use crate::output::atomic::{alive, hostname};
+use crate::output::atomic::{alive, hostname, sidecar};
 use std::fs::{self, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -40,12 +40,10 @@ impl Claims {
         }
     }
 
+    /// `.NAME.rayreel-claim` beside the frame (a hash for NAME when the name is too long).
     pub fn path(frame: &Path) -> PathBuf {
-        let name = frame
-            .file_name()
-            .map(|n| n.to_string_lossy())
-            .unwrap_or_default();
-        frame.with_file_name(format!(".{name}.rayreel-claim"))
+        const SUFFIX: &str = ".rayreel-claim";
+        sidecar(frame, SUFFIX, 1 + SUFFIX.len())
     }
 
     /// Claims the frame file `frame`, taking over a stale claim.

@@ -308,3 +308,227 @@ fn ten_million_frames_cost_what_their_selection_costs() {
         assert!(run.peak_kb < 64 * 1024, "{what}");
     }
 }
+
+/// This machine's name as rayreel writes it into temporary names.
+fn host() -> String {
+    let name = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
+    name.trim()
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || *c == '.')
+        .take(64)
+        .collect()
+}
+
+fn alive(pid: i32) -> bool {
+    // SAFETY: signal 0 only checks that the process exists.
+    unsafe { libc::kill(pid, 0) == 0 }
+}
+
+/// Renders frames 0-3 of seq.yaml to out/, quietly.
+const FIRST_FOUR: [&str; 7] = [
+    "render",
+    "seq.yaml",
+    "-o",
+    "out/f_####.png",
+    "--frames",
+    "0-3",
+    "-q",
+];
+
+#[test]
+fn a_link_planted_under_a_temporary_name_is_never_followed() {
+    let tmp = with_clean_render("planted-links", &small());
+    let victim = tmp.join("victim.txt");
+    std::fs::write(&victim, "precious").unwrap();
+    let out = tmp.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    // The old names were `.NAME.rayreel-tmp-HOST-PID`: plant links for the pids to come.
+    let last: i32 = std::fs::read_to_string("/proc/sys/kernel/ns_last_pid")
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    let planted = last + 1..last + 300;
+    for pid in planted.clone() {
+        for n in 0..4 {
+            let link = out.join(format!(".f_{n:04}.png.rayreel-tmp-{}-{pid}", host()));
+            std::os::unix::fs::symlink(&victim, link).unwrap();
+        }
+    }
+    let child = bin().args(FIRST_FOUR).current_dir(&tmp).spawn().unwrap();
+    let pid = child.id() as i32;
+    let status = child.wait_with_output().unwrap().status;
+    assert!(status.success());
+    assert!(
+        planted.contains(&pid),
+        "pid {pid} was not among the planted ones"
+    );
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious");
+    for n in 0..4 {
+        let name = format!("f_{n:04}.png");
+        let meta = std::fs::symlink_metadata(out.join(&name)).unwrap();
+        assert!(meta.file_type().is_file(), "{name} is not a plain file");
+        assert_eq!(
+            std::fs::read(out.join(&name)).unwrap(),
+            std::fs::read(tmp.join("clean").join(&name)).unwrap()
+        );
+    }
+}
+
+#[test]
+fn cleanup_removes_only_temporaries_of_this_jobs_frames() {
+    let tmp = scratch("cleanup");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let out = tmp.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let dead = 3_999_998;
+    assert!(!alive(dead));
+    let me = std::process::id();
+    let h = host();
+    let keep = [
+        format!("notes.rayreel-tmp-{h}-{dead}"),
+        format!(".notes.rayreel-tmp-{h}-{dead}"),
+        format!(".f_9999.png.rayreel-tmp-{h}-{dead}"),
+        format!(".g_0001.png.rayreel-tmp-{h}-{dead}-0123456789abcdef"),
+        format!(".f_0003.png.rayreel-tmp-{h}-{me}-0123456789abcdef"),
+        format!(".f_0001.png.rayreel-tmp-{h}-{dead}-extra"),
+    ];
+    let remove = [
+        format!(".f_0001.png.rayreel-tmp-{h}-{dead}-0123456789abcdef"),
+        format!(".f_0002.png.rayreel-tmp-{h}-{dead}"),
+    ];
+    for name in keep.iter().chain(&remove) {
+        std::fs::write(out.join(name), "mine").unwrap();
+    }
+    let run = run_in(&tmp, &FIRST_FOUR);
+    assert!(run.status.success(), "{}", stderr(&run));
+    for name in &keep {
+        assert!(out.join(name).exists(), "{name} was removed");
+    }
+    for name in &remove {
+        assert!(!out.join(name).exists(), "{name} was left");
+    }
+}
+
+#[test]
+fn a_sequence_file_cannot_write_through_a_linked_directory() {
+    let tmp = scratch("escape");
+    let (work, elsewhere) = (tmp.join("work"), tmp.join("elsewhere"));
+    std::fs::create_dir_all(work.join("inside")).unwrap();
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    std::os::unix::fs::symlink("../elsewhere", work.join("outlink")).unwrap();
+    std::os::unix::fs::symlink("../nowhere", work.join("dangling")).unwrap();
+    std::os::unix::fs::symlink("inside", work.join("inlink")).unwrap();
+    for output in [
+        "outlink/f_####.png",
+        "outlink/new/deeper/f_####.png",
+        "dangling/f_####.png",
+    ] {
+        let yaml = format!("{}output: {output}\n", small());
+        std::fs::write(work.join("seq.yaml"), yaml).unwrap();
+        let out = run_in(&work, &["render", "seq.yaml", "--frames", "0"]);
+        assert_eq!(out.status.code(), Some(2), "{output}: {}", stderr(&out));
+        assert!(
+            stderr(&out).contains(&format!(
+                "output: `{output}` leads outside the current directory"
+            )),
+            "{}",
+            stderr(&out)
+        );
+        assert_eq!(run_in(&work, &["check", "seq.yaml"]).status.code(), Some(2));
+    }
+    assert!(files(&elsewhere).is_empty());
+    // A link that stays inside is fine, and the command line may point anywhere.
+    std::fs::write(
+        work.join("seq.yaml"),
+        format!("{}output: inlink/f_####.png\n", small()),
+    )
+    .unwrap();
+    let out = run_in(&work, &["render", "seq.yaml", "--frames", "0", "-q"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(files(&work.join("inside")), ["f_0000.png"]);
+    let out = run_in(
+        &work,
+        &[
+            "render",
+            "seq.yaml",
+            "--frames",
+            "0",
+            "-q",
+            "-o",
+            "outlink/f_####.png",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(files(&elsewhere), ["f_0000.png"]);
+}
+
+#[test]
+fn long_names_render_and_impossible_ones_are_refused_at_load() {
+    let tmp = scratch("names");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    // The longest legal frame name: 254 bytes once `####` is a number.
+    let name = format!("{}_####.png", "n".repeat(254 - 9));
+    for (dir, extra) in [("a", vec![]), ("b", vec!["--claim"])] {
+        let pattern = format!("{dir}/{name}");
+        let mut args = vec![
+            "render", "seq.yaml", "--frames", "0-1", "-q", "-o", &pattern,
+        ];
+        args.extend(extra);
+        let out = run_in(&tmp, &args);
+        assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+        assert_eq!(files(&tmp.join(dir)).len(), 2, "{args:?}");
+    }
+    let status = run_in(
+        &tmp,
+        &[
+            "status",
+            "seq.yaml",
+            "--frames",
+            "0-1",
+            "-o",
+            &format!("a/{name}"),
+        ],
+    );
+    assert_eq!(status.status.code(), Some(0));
+    let yaml = format!("{}output: c/{name}\n", small());
+    std::fs::write(tmp.join("long.yaml"), yaml).unwrap();
+    let out = run_in(&tmp, &["render", "long.yaml", "--frames", "0", "-q"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+
+    let too_long = format!("{}_####.png", "n".repeat(256 - 9));
+    let out = run_in(
+        &tmp,
+        &["render", "seq.yaml", "-o", &format!("d/{too_long}")],
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("--output: the name `nnnnnnnnnnnnnnnnnnnnnnnn…nnnnnnnnnnn_0023.png` is 256 bytes; a file or directory name may have at most 255"),
+        "{}",
+        stderr(&out)
+    );
+    for (file, output, message) in [
+        ("toolong.yaml", format!("e/{too_long}"), "is 256 bytes"),
+        (
+            "nul.yaml",
+            "\"f/n\\0_####.png\"".to_string(),
+            "contains a NUL byte",
+        ),
+    ] {
+        std::fs::write(tmp.join(file), format!("{}output: {output}\n", small())).unwrap();
+        let out = run_in(&tmp, &["render", file]);
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        let prefix = format!("rayreel: {file}:");
+        assert!(
+            stderr(&out).starts_with(&prefix)
+                && stderr(&out).contains(": output: ")
+                && stderr(&out).contains(message),
+            "{}",
+            stderr(&out)
+        );
+    }
+    // Refused before anything was created.
+    for dir in ["d", "e", "f"] {
+        assert!(!tmp.join(dir).exists(), "{dir} was created");
+    }
+}

@@ -41,8 +41,8 @@ fn load(job: &JobArgs) -> Result<(Sequence, FrameSet), Error> {
     Ok((seq, frames))
 }
 
-/// The file pattern and format; `create` makes the directory and clears our stale temporaries.
-fn file_sink(seq: &Sequence, job: &JobArgs, create: bool) -> Result<Files, Error> {
+/// The file pattern and format.
+fn file_sink(seq: &Sequence, job: &JobArgs) -> Result<Files, Error> {
     let sixteen = job.bit_depth == "16";
     let pattern = Pattern::new(&seq.output, seq.timeline.frame_count).map_err(Error::Usage)?;
     let format = FileFormat::for_extension(
@@ -64,21 +64,24 @@ fn file_sink(seq: &Sequence, job: &JobArgs, create: bool) -> Result<Files, Error
             seq.output
         )));
     }
-    if create {
-        let dir = plan::directory(&pattern.frame_path(0));
-        std::fs::create_dir_all(&dir).map_err(|e| {
-            Error::Failed(format!("{}: cannot create directory: {e}", dir.display()))
-        })?;
-        output::atomic::clean_leftovers(&dir);
-    }
     Ok(Files { pattern, format })
+}
+
+/// Makes the frames' directory and removes this job's temporaries that processes which are
+/// gone left there.
+fn prepare(files: &Files, frames: &FrameSet) -> Result<(), Error> {
+    let dir = plan::directory(&files.pattern.frame_path(0));
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
+    output::atomic::clean_leftovers(&dir, &files.pattern, frames);
+    Ok(())
 }
 
 pub fn render(args: RenderArgs) -> Result<(), Error> {
     let (seq, frames) = load(&args.job)?;
     // With --pipe the stream is the product; files come too only when asked for explicitly.
     let files = match args.pipe.is_none() || args.job.output.is_some() {
-        true => Some(file_sink(&seq, &args.job, !args.dry_run)?),
+        true => Some(file_sink(&seq, &args.job)?),
         false => None,
     };
     if args.claim && (files.is_none() || args.pipe.is_some()) {
@@ -86,6 +89,9 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
             "--claim shares frame files between processes; it cannot be combined with --pipe"
                 .into(),
         ));
+    }
+    if let Some(files) = files.as_ref().filter(|_| !args.dry_run) {
+        prepare(files, &frames)?;
     }
     let stream = args.pipe.map(|p| (p, args.job.bit_depth == "16"));
     let plan = files
@@ -312,7 +318,7 @@ fn finish(outcome: Result<Outcome, String>, plan: Option<&Plan>) -> Result<(), E
 /// every selected frame is up to date.
 pub fn status(args: StatusArgs) -> Result<(), Error> {
     let (seq, frames) = load(&args.job)?;
-    let files = file_sink(&seq, &args.job, false)?;
+    let files = file_sink(&seq, &args.job)?;
     let plan = plan::plan(&seq, &frames, &files, false);
     let dir = plan::directory(&files.pattern.frame_path(0));
     let mut lines = vec![format!("{}: {}", shown(&dir), plan.status_line())];

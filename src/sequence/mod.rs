@@ -12,7 +12,7 @@ pub mod raw;
 pub use guard::nesting_depth;
 
 use crate::camera::{Camera, Degenerate, Pose};
-use crate::output::pattern::Pattern;
+use crate::output::{atomic, pattern::Pattern};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
 use crate::timeline::{Ease, Interpolation, Key, Orbit, Path as TimelinePath, Timeline};
 use crate::tracer::{Adaptive, Sampler, Settings};
@@ -328,15 +328,55 @@ fn apply(seq: &mut Sequence, o: &Overrides) -> Result<(), LoadError> {
     Ok(())
 }
 
-/// A pattern that names frames of a type rayreel writes.
+/// Longest path the kernel takes, in bytes (PATH_MAX less its NUL).
+const MAX_PATH_BYTES: usize = 4095;
+
+/// A pattern that names frames of a type rayreel writes, in paths the file system can take.
 fn output_pattern(output: &str, frame_count: u64) -> Result<Pattern, String> {
+    if output.contains('\0') {
+        return Err(format!(
+            "contains a NUL byte, which no file name may hold (got `{}`)",
+            output.replace('\0', "\\0")
+        ));
+    }
     let pattern = Pattern::new(output, frame_count)?;
+    // Every frame's path is as long as the last one's (the numbers are padded to one width).
+    let last = pattern.frame_path(frame_count.saturating_sub(1));
+    for part in last.iter() {
+        let part = part.to_string_lossy();
+        if part.len() > atomic::NAME_MAX {
+            return Err(format!(
+                "the name `{}` is {} bytes; a file or directory name may have at most {}",
+                abbreviated(&part),
+                part.len(),
+                atomic::NAME_MAX
+            ));
+        }
+    }
+    if last.as_os_str().len() > MAX_PATH_BYTES {
+        return Err(format!(
+            "a frame's path is {} bytes (`{}`); a path may have at most {MAX_PATH_BYTES}",
+            last.as_os_str().len(),
+            abbreviated(&last.to_string_lossy())
+        ));
+    }
     match pattern.extension().as_str() {
         "png" | "exr" => Ok(pattern),
         other => Err(format!(
             "unsupported file type `.{other}`; frames are .png or .exr (got `{output}`)"
         )),
     }
+}
+
+/// `s` cut in the middle when long: `aaaaaaaaaaaaaaaaaaaa…aaaaaaaa_0001.png`.
+fn abbreviated(s: &str) -> String {
+    let chars: Vec<char> = s.chars().collect();
+    if chars.len() <= 48 {
+        return s.to_string();
+    }
+    let head: String = chars[..24].iter().collect();
+    let tail: String = chars[chars.len() - 20..].iter().collect();
+    format!("{head}…{tail}")
 }
 
 /// A sequence file may come from someone else, so its `output` stays below the current
@@ -354,7 +394,36 @@ fn contained(path: &str, output: &str) -> Check<()> {
             ),
         );
     }
+    if let Some(dir) = escapes(output) {
+        return invalid(
+            path,
+            format!(
+                "`{output}` leads outside the current directory: its directory is {} once symbolic links are followed; a sequence file may only write below the current directory (if you mean it, give it on the command line with --output)",
+                dir.display()
+            ),
+        );
+    }
     Ok(())
+}
+
+/// Where the directory of a relative `output` really is when it is not below the current
+/// directory (a symbolic link on the way leads elsewhere, or leads nowhere); `None` when it is
+/// inside. The part that does not exist yet will be created as plain directories.
+pub fn escapes(output: &str) -> Option<PathBuf> {
+    let cwd = std::fs::canonicalize(".").ok()?;
+    let mut existing = Path::new(output).parent().unwrap_or(Path::new(""));
+    let mut missing = Vec::new();
+    while !existing.as_os_str().is_empty() && std::fs::symlink_metadata(existing).is_err() {
+        missing.push(existing.file_name()?);
+        existing = existing.parent().unwrap_or(Path::new(""));
+    }
+    let base = match existing.as_os_str().is_empty() {
+        true => cwd.clone(),
+        // An entry that exists but does not resolve is a link that leads nowhere.
+        false => std::fs::canonicalize(existing).unwrap_or_else(|_| existing.to_path_buf()),
+    };
+    let dir = missing.iter().rev().fold(base, |d, part| d.join(part));
+    (!dir.starts_with(&cwd)).then_some(dir)
 }
 
 fn pixels(w: u32, h: u32) -> Result<(), String> {
