@@ -2,6 +2,7 @@
 //! otherwise (so farm wrappers can follow), one JSON object per frame event with
 //! `--progress json`, nothing with `--quiet`. stdout is never touched.
 
+use crate::claim::Held;
 use crate::console::printable;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -75,6 +76,53 @@ impl Progress {
             Mode::Json => eprintln!("{{\"event\": \"warning\", \"text\": {}}}", quote(text)),
             _ => eprintln!("{}", printable(text)),
         }
+    }
+
+    /// Frames other processes hold, and the first few of their claims: shown even with
+    /// `--quiet`, since a worker that waits must say on what.
+    pub fn waiting(&self, frames: &str, count: usize, claims: &[Held]) {
+        let age = |h: &Held| h.heartbeat.map_or(-1.0, |a| a.as_secs_f64());
+        if let Mode::Json = self.mode {
+            let claims: Vec<String> = claims
+                .iter()
+                .map(|h| {
+                    format!(
+                        "{{\"path\": {}, \"owner\": {}, \"heartbeat_seconds\": {:.0}}}",
+                        quote(&h.path.display().to_string()),
+                        quote(&h.owner),
+                        age(h)
+                    )
+                })
+                .collect();
+            eprintln!(
+                "{{\"event\": \"waiting\", \"frames\": {}, \"claims\": [{}]}}",
+                quote(frames),
+                claims.join(", ")
+            );
+            return;
+        }
+        let claims: Vec<String> = claims
+            .iter()
+            .map(|h| {
+                format!(
+                    "{} ({}, heartbeat {:.0} s ago)",
+                    h.path.display(),
+                    h.owner,
+                    age(h)
+                )
+            })
+            .collect();
+        let more = count.saturating_sub(claims.len());
+        self.warn(&format!(
+            "waiting for {count} frame{} ({frames}) that other processes hold: {}{}",
+            if count == 1 { "" } else { "s" },
+            claims.join(", "),
+            if more > 0 {
+                format!(" and {more} more")
+            } else {
+                String::new()
+            }
+        ));
     }
 
     /// Whether `frame_skipped` shows anything (one JSON line per frame).

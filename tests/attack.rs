@@ -532,3 +532,131 @@ fn long_names_render_and_impossible_ones_are_refused_at_load() {
         assert!(!tmp.join(dir).exists(), "{dir} was created");
     }
 }
+
+/// This test process's identity as a claim records it: `host=H pid=P start=S boot=B`.
+fn my_claim_owner() -> String {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap();
+    let start = stat[stat.rfind(')').unwrap() + 1..]
+        .split_whitespace()
+        .nth(19)
+        .unwrap()
+        .to_string();
+    let boot = std::fs::read_to_string("/proc/sys/kernel/random/boot_id").unwrap();
+    format!(
+        "host={} pid={} start={start} boot={}",
+        host(),
+        std::process::id(),
+        boot.trim()
+    )
+}
+
+/// Starts a `--claim` render of frames 0-3 into out/ with `extra` flags, stderr piped.
+fn claiming(dir: &Path, extra: &[&str]) -> std::process::Child {
+    bin()
+        .args(&FIRST_FOUR[..6])
+        .args(["--claim", "--threads", "1"])
+        .args(extra)
+        .current_dir(dir)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// Waits at most `seconds` for `child`; kills it and fails if it is still running.
+fn finishes_within(mut child: std::process::Child, seconds: u64, what: &str) -> String {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(seconds);
+    while child.try_wait().unwrap().is_none() {
+        if std::time::Instant::now() > deadline {
+            child.kill().unwrap();
+            let out = child.wait_with_output().unwrap();
+            panic!("{what}: still waiting after {seconds} s: {}", stderr(&out));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{what}: {}", stderr(&out));
+    stderr(&out)
+}
+
+/// out/ holds frames 0-3 as the clean render has them, and nothing else.
+fn assert_first_four_clean(tmp: &Path) {
+    let names = files(&tmp.join("out"));
+    assert_eq!(names.len(), 4, "{names:?}");
+    for name in names {
+        let (a, b) = (tmp.join("out").join(&name), tmp.join("clean").join(&name));
+        assert!(
+            std::fs::read(a).unwrap() == std::fs::read(b).unwrap(),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn claims_of_processes_that_are_gone_are_taken_over() {
+    let tmp = with_clean_render("claims-gone", &small());
+    let out = tmp.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let me = my_claim_owner();
+    // A live pid (this test) that is not the process which wrote the claim: after pid reuse
+    // or a container restart the start time differs, or the boot id does.
+    let reused = me.replace(" start=", " start=1");
+    let rebooted = me.replace(" boot=", " boot=0");
+    std::fs::write(out.join(".f_0000.png.rayreel-claim"), &reused).unwrap();
+    std::fs::write(out.join(".f_0001.png.rayreel-claim"), &rebooted).unwrap();
+    // This very process, alive, but silent for an hour.
+    let silent = out.join(".f_0002.png.rayreel-claim");
+    std::fs::write(&silent, &me).unwrap();
+    let hour_ago = std::time::SystemTime::now() - std::time::Duration::from_secs(3600);
+    std::fs::File::options()
+        .append(true)
+        .open(&silent)
+        .unwrap()
+        .set_modified(hour_ago)
+        .unwrap();
+    finishes_within(
+        claiming(&tmp, &["--claim-timeout", "60"]),
+        30,
+        "gone claims",
+    );
+    assert_first_four_clean(&tmp);
+}
+
+#[test]
+fn a_worker_says_what_it_waits_for_and_goes_on_when_the_claim_goes() {
+    let tmp = with_clean_render("claims-wait", &small());
+    let out = tmp.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let claim = out.join(".f_0002.png.rayreel-claim");
+    std::fs::write(&claim, my_claim_owner()).unwrap();
+    let mut child = claiming(&tmp, &["--progress", "json"]);
+    let err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufRead::lines(err) {
+            let _ = tx.send(line.unwrap());
+        }
+    });
+    let line = loop {
+        match rx.recv_timeout(std::time::Duration::from_secs(20)) {
+            Ok(line) if line.contains("\"event\": \"waiting\"") => break line,
+            Ok(_) => {}
+            Err(e) => {
+                child.kill().unwrap();
+                panic!("the worker did not say what it waits for: {e}");
+            }
+        }
+    };
+    let event: serde_yaml::Value = serde_yaml::from_str(&line).unwrap();
+    assert_eq!(event["frames"], "2", "{line}");
+    let held = &event["claims"][0];
+    assert_eq!(held["path"], "out/.f_0002.png.rayreel-claim", "{line}");
+    assert_eq!(
+        held["owner"].as_str(),
+        Some(my_claim_owner().as_str()),
+        "{line}"
+    );
+    // The holder goes away without writing the frame: the worker renders it.
+    std::fs::remove_file(&claim).unwrap();
+    finishes_within(child, 30, "waiting worker");
+    assert_first_four_clean(&tmp);
+}

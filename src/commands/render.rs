@@ -3,7 +3,7 @@
 
 use super::{out, shown};
 use crate::Error;
-use crate::claim::Claims;
+use crate::claim::{self, Claims, Held};
 use crate::cli::{JobArgs, ProgressFormat, RenderArgs, StatusArgs, resolve_shard};
 use crate::frameset::FrameSet;
 use crate::output::{self, FileFormat, pattern::Pattern, stream::StreamFormat};
@@ -12,7 +12,7 @@ use crate::progress::Progress;
 use crate::schedule::{self, Files, Job, Outcome, Task};
 use crate::sequence::{self, Overrides, Sequence};
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// The validated sequence and this task's frames.
 fn load(job: &JobArgs) -> Result<(Sequence, FrameSet), Error> {
@@ -195,9 +195,11 @@ fn describe(s: &State) -> String {
 }
 
 /// Claim mode: render what can be claimed, then keep re-planning until every frame is up to
-/// date, waiting on frames other live processes hold and taking over those whose owner died.
+/// date, waiting on frames other live processes hold (and saying so) and taking over those
+/// whose owner died or went silent.
 fn cooperate(mut job: Job, frames: &FrameSet, progress: &mut Progress) -> Result<Outcome, String> {
     let mut written = 0;
+    let mut told: Option<Instant> = None;
     loop {
         let outcome = schedule::run(
             Job {
@@ -215,10 +217,14 @@ fn cooperate(mut job: Job, frames: &FrameSet, progress: &mut Progress) -> Result
             return Ok(outcome);
         };
         written += w;
+        let files = job.files.as_ref().expect("claim mode has files");
         if !held.is_empty() {
+            if told.is_none_or(|t| t.elapsed() >= WAITING_REPORT_EVERY) {
+                report_waiting(progress, files, &held);
+                told = Some(Instant::now());
+            }
             std::thread::sleep(Duration::from_millis(500));
         }
-        let files = job.files.as_ref().expect("claim mode has files");
         let plan = plan::plan(&job.sequence, frames, files, false);
         job.tasks = tasks(frames, Some(&plan), false);
         if job.tasks.is_empty() {
@@ -231,6 +237,21 @@ fn cooperate(mut job: Job, frames: &FrameSet, progress: &mut Progress) -> Result
             progress.add_total(job.tasks.len() as u64);
         }
     }
+}
+
+/// How often a waiting process repeats what it waits for.
+const WAITING_REPORT_EVERY: Duration = Duration::from_secs(30);
+
+/// Which frames other processes hold, with the first few claims' paths and owners.
+fn report_waiting(progress: &Progress, files: &Files, held: &[u64]) {
+    let mut set = FrameSet::new();
+    held.iter().for_each(|&n| set.push(n));
+    let claims: Vec<Held> = held
+        .iter()
+        .take(3)
+        .map(|&n| claim::held(&files.pattern.frame_path(n)))
+        .collect();
+    progress.waiting(&set.to_string(), held.len(), &claims);
 }
 
 fn print_dry_run(plan: Option<&Plan>, frames: &FrameSet) -> Result<(), Error> {
