@@ -158,8 +158,8 @@ pub struct JobArgs {
 pub struct RenderArgs {
     #[command(flatten)]
     pub job: JobArgs,
-    /// Worker threads (default: all cores).
-    #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    /// Worker threads (default: all cores; at most 1024).
+    #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..=MAX_THREADS as i64))]
     pub threads: Option<u16>,
     /// No progress bar and no per-frame lines.
     #[arg(long, short)]
@@ -189,6 +189,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "SECONDS", default_value_t = 120, value_parser = clap::value_parser!(u64).range(2..))]
     pub claim_timeout: u64,
 }
+
+/// Most worker threads `--threads` may ask for: more than machines have cores, few enough to
+/// start in moments.
+pub const MAX_THREADS: u16 = 1024;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum ProgressFormat {

@@ -65,7 +65,70 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
 
 fn check(args: CheckArgs) -> Result<(), Error> {
     let seq = sequence::load(&args.file, &Overrides::default())?;
-    out(&summary(&shown(&args.file), &seq))
+    let (cost, warning) = cost(&seq, seq.timeline.frame_count);
+    if let Some(w) = warning {
+        eprintln!("{w}");
+    }
+    out(&format!(
+        "{}  cost:       {cost}\n",
+        summary(&shown(&args.file), &seq)
+    ))
+}
+
+/// Jobs above this many rays are called enormous: about 9 hours at `RAYS_PER_SECOND`.
+pub const ENORMOUS_RAYS: f64 = 1e12;
+/// Rays a second of the 2-core machine measured under Performance in the README.
+const RAYS_PER_SECOND: f64 = 3e7;
+
+/// An upper bound on the rays one frame traces: pixels × samples (adaptive: its maximum) ×
+/// (1 + lights that cast shadows) × max_depth, since each surface a path visits sends one ray
+/// on and at most one shadow ray per light.
+pub fn rays_per_frame(seq: &Sequence) -> f64 {
+    let s = &seq.settings;
+    let samples = s.adaptive.map_or(s.samples, |a| a.max_samples);
+    let shadows = seq
+        .scene
+        .lights
+        .iter()
+        .filter(|l| !matches!(l, Light::Ambient { .. }))
+        .count();
+    f64::from(s.width)
+        * f64::from(s.height)
+        * f64::from(samples)
+        * (1 + shadows) as f64
+        * f64::from(s.max_depth)
+}
+
+/// `up to 2.76e9 rays a frame, 3.98e11 for 144 frames (…)`, and a warning for an enormous
+/// job.
+pub(crate) fn cost(seq: &Sequence, frames: u64) -> (String, Option<String>) {
+    let frame = rays_per_frame(seq);
+    let total = frame * frames as f64;
+    let line = format!(
+        "up to {frame:.2e} rays a frame, {total:.2e} for {frames} frame{} (pixels × samples × (1 + lights) × max_depth)",
+        if frames == 1 { "" } else { "s" }
+    );
+    let warning = (total > ENORMOUS_RAYS).then(|| {
+        format!(
+            "warning: this job may trace up to {total:.2e} rays, about {} at {RAYS_PER_SECOND:.0e} rays/s; check the size, render.samples and render.max_depth (Ctrl-C or SIGTERM stops a render within about a second)",
+            duration(total / RAYS_PER_SECOND)
+        )
+    });
+    (line, warning)
+}
+
+/// `3.2 hours`, `41 years`.
+fn duration(seconds: f64) -> String {
+    let units = [
+        (31_557_600.0, "years"),
+        (86_400.0, "days"),
+        (3600.0, "hours"),
+        (60.0, "minutes"),
+    ];
+    match units.iter().find(|(unit, _)| seconds >= 2.0 * unit) {
+        Some((unit, name)) => format!("{:.0} {name}", seconds / unit),
+        None => format!("{seconds:.0} seconds"),
+    }
 }
 
 /// The one-screen description `rayreel check` prints.

@@ -90,25 +90,26 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
                 .into(),
         ));
     }
-    if let Some(files) = files.as_ref().filter(|_| !args.dry_run) {
+    if args.dry_run {
+        let plan = files
+            .as_ref()
+            .map(|f| plan::plan(&seq, &frames, f, args.force));
+        return print_dry_run(&seq, plan.as_ref(), &frames);
+    }
+    let (pool, threads) = workers(args.threads)?;
+    if let Some(files) = &files {
         prepare(files, &frames)?;
     }
     let stream = args.pipe.map(|p| (p, args.job.bit_depth == "16"));
     let plan = files
         .as_ref()
         .map(|f| plan::plan(&seq, &frames, f, args.force));
-    if args.dry_run {
-        return print_dry_run(plan.as_ref(), &frames);
-    }
     let tasks = tasks(&frames, plan.as_ref(), stream.is_some());
-    let threads = match args.threads {
-        Some(t) => usize::from(t),
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
-    let count = seq.timeline.frame_count;
     let mut progress = match args.progress {
-        ProgressFormat::Json if !args.quiet => Progress::json(tasks.len() as u64, count),
-        _ => Progress::new(tasks.len() as u64, count, args.quiet),
+        ProgressFormat::Json if !args.quiet => {
+            Progress::json(tasks.len() as u64, seq.timeline.frame_count)
+        }
+        _ => Progress::new(tasks.len() as u64, seq.timeline.frame_count, args.quiet),
     };
     if let (Some(plan), Some(files)) = (&plan, &files) {
         progress.note(&plan.summary());
@@ -117,7 +118,6 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     if let Some((format, sixteen)) = stream {
         stream_notes(&progress, &seq, format, sixteen, args.print_ffmpeg);
     }
-    schedule::install_interrupt_handler();
     let claims = args
         .claim
         .then(|| Arc::new(Claims::new(Duration::from_secs(args.claim_timeout))));
@@ -130,21 +130,47 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         threads,
         claims,
     };
+    let outcome = run_job(&pool, job, &frames, &mut progress)?;
+    finish(outcome, plan.as_ref(), stream.is_some())
+}
+
+/// The worker threads, started before anything else happens: a count the machine cannot
+/// start is refused at once (exit 2 when it was asked for with --threads).
+fn workers(asked: Option<u16>) -> Result<(rayon::ThreadPool, usize), Error> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = asked.map_or(cores, usize::from);
+    let pool = schedule::worker_pool(threads).map_err(|e| match asked {
+        Some(_) => Error::Usage(format!(
+            "--threads {threads}: {e}; this machine has {cores} cores, and more threads than cores do not render faster"
+        )),
+        None => Error::Failed(e),
+    })?;
+    Ok((pool, threads))
+}
+
+/// Runs the job (cooperating through claims if asked), then checks what it wrote.
+fn run_job(
+    pool: &rayon::ThreadPool,
+    job: Job,
+    frames: &FrameSet,
+    progress: &mut Progress,
+) -> Result<Result<Outcome, String>, Error> {
     let mut written = FrameSet::new();
     job.tasks
         .iter()
         .filter(|t| t.write_file)
         .for_each(|t| written.push(t.frame));
     let (seq, files) = (Arc::clone(&job.sequence), job.files.clone());
+    schedule::install_interrupt_handler();
     let outcome = match job.claims.is_some() {
-        true => cooperate(job, &frames, &mut progress),
-        false => schedule::run(job, &mut progress),
+        true => cooperate(pool, job, frames, progress),
+        false => schedule::run_on(pool, job, progress),
     };
     progress.finish();
     if let (Ok(Outcome::Complete { .. }), Some(files)) = (&outcome, &files) {
         verify(&seq, &written, files)?;
     }
-    finish(outcome, plan.as_ref())
+    Ok(outcome)
 }
 
 /// After a complete run, every frame it wrote must still be there and intact: a file that
@@ -197,11 +223,17 @@ fn describe(s: &State) -> String {
 /// Claim mode: render what can be claimed, then keep re-planning until every frame is up to
 /// date, waiting on frames other live processes hold (and saying so) and taking over those
 /// whose owner died or went silent.
-fn cooperate(mut job: Job, frames: &FrameSet, progress: &mut Progress) -> Result<Outcome, String> {
+fn cooperate(
+    pool: &rayon::ThreadPool,
+    mut job: Job,
+    frames: &FrameSet,
+    progress: &mut Progress,
+) -> Result<Outcome, String> {
     let mut written = 0;
     let mut told: Option<Instant> = None;
     loop {
-        let outcome = schedule::run(
+        let outcome = schedule::run_on(
+            pool,
             Job {
                 tasks: std::mem::take(&mut job.tasks),
                 claims: job.claims.clone(),
@@ -217,6 +249,12 @@ fn cooperate(mut job: Job, frames: &FrameSet, progress: &mut Progress) -> Result
             return Ok(outcome);
         };
         written += w;
+        if schedule::interrupted() {
+            return Ok(Outcome::Interrupted {
+                written,
+                streamed: 0,
+            });
+        }
         let files = job.files.as_ref().expect("claim mode has files");
         if !held.is_empty() {
             if told.is_none_or(|t| t.elapsed() >= WAITING_REPORT_EVERY) {
@@ -254,11 +292,20 @@ fn report_waiting(progress: &Progress, files: &Files, held: &[u64]) {
     progress.waiting(&set.to_string(), held.len(), &claims);
 }
 
-fn print_dry_run(plan: Option<&Plan>, frames: &FrameSet) -> Result<(), Error> {
-    out(&match plan {
-        Some(plan) => format!("{}\nwould render: {}\n", plan.summary(), plan.to_render()),
-        None => format!("would stream frames: {frames}\n"),
-    })
+fn print_dry_run(seq: &Sequence, plan: Option<&Plan>, frames: &FrameSet) -> Result<(), Error> {
+    let (text, rendering) = match plan {
+        Some(plan) => {
+            let render = plan.to_render();
+            let text = format!("{}\nwould render: {render}\n", plan.summary());
+            (text, render.len())
+        }
+        None => (format!("would stream frames: {frames}\n"), frames.len()),
+    };
+    let (cost, warning) = super::cost(seq, rendering);
+    if let Some(w) = warning {
+        eprintln!("{w}");
+    }
+    out(&format!("{text}cost: {cost}\n"))
 }
 
 /// Every selected frame when streaming (files written only where the plan says), otherwise
@@ -313,7 +360,30 @@ fn stream_notes(
     }
 }
 
-fn finish(outcome: Result<Outcome, String>, plan: Option<&Plan>) -> Result<(), Error> {
+/// `interrupted: 3 frames written and 14 streamed to stdout in this run; …`.
+fn interrupted_summary(
+    written: usize,
+    streamed: usize,
+    plan: Option<&Plan>,
+    streaming: bool,
+) -> String {
+    let frames = |n: usize| format!("{n} frame{}", if n == 1 { "" } else { "s" });
+    let done = match (plan.is_some(), streaming) {
+        (true, true) => format!(
+            "{} written and {streamed} streamed to stdout",
+            frames(written)
+        ),
+        (false, _) => format!("{} streamed to stdout", frames(streamed)),
+        (true, false) => format!("{} written", frames(written)),
+    };
+    format!("interrupted: {done} in this run; run the same command again to render the rest")
+}
+
+fn finish(
+    outcome: Result<Outcome, String>,
+    plan: Option<&Plan>,
+    streaming: bool,
+) -> Result<(), Error> {
     match outcome.map_err(Error::Failed)? {
         Outcome::Complete { .. } => {
             let blocked = plan.map(Plan::blocked).unwrap_or_default();
@@ -324,10 +394,10 @@ fn finish(outcome: Result<Outcome, String>, plan: Option<&Plan>) -> Result<(), E
                 "frames {blocked} were not written: files rayreel did not write are in the way (use --force to overwrite them)"
             )))
         }
-        Outcome::Interrupted { written } => Err(Error::Interrupted(format!(
-            "interrupted: {written} frame{} written in this run; run the same command again to render the rest",
-            if written == 1 { "" } else { "s" }
-        ))),
+        Outcome::Interrupted { written, streamed } => Err(Error::Interrupted(
+            interrupted_summary(written, streamed, plan, streaming),
+            schedule::interrupt_code(),
+        )),
         Outcome::ReaderClosed { streamed } => {
             eprintln!("rayreel: the reader closed the stream after {streamed} frames; stopping");
             Ok(())

@@ -13,7 +13,7 @@ use crate::frame::Frame;
 use crate::scene::Scene;
 use glam::DVec3;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 /// What decides a frame besides the scene and the camera.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -61,11 +61,24 @@ impl World {
 }
 
 pub fn render(world: &World, camera: &Camera, settings: &Settings, frame: u64) -> Frame {
+    render_or_stop(world, camera, settings, frame, &AtomicBool::new(false)).expect("never stopped")
+}
+
+/// `render`, given up (`None`) as soon as `stop` is set: it is checked before each row, each
+/// pixel and each sample, so even a frame of hours stops within milliseconds.
+pub fn render_or_stop(
+    world: &World,
+    camera: &Camera,
+    settings: &Settings,
+    frame: u64,
+    stop: &AtomicBool,
+) -> Option<Frame> {
     let tracer = PixelTracer {
         world,
         camera,
         settings,
         frame,
+        stop,
     };
     let (w, h) = (settings.width as usize, settings.height as usize);
     let mut rgb = vec![0f32; 3 * w * h];
@@ -90,7 +103,10 @@ pub fn render(world: &World, camera: &Camera, settings: &Settings, frame: u64) -
         samples += tracer.pass(&mut rgb, &mut [], more, |i| marked[i], &non_finite, &rays);
     }
     let depth = settings.depth.then(|| tracer.depth());
-    Frame {
+    if stop.load(Ordering::Relaxed) {
+        return None;
+    }
+    Some(Frame {
         width: settings.width,
         height: settings.height,
         rgb,
@@ -98,7 +114,7 @@ pub fn render(world: &World, camera: &Camera, settings: &Settings, frame: u64) -
         non_finite: non_finite.into_inner(),
         samples,
         rays: rays.into_inner(),
-    }
+    })
 }
 
 /// Which samples a pass traces for each selected pixel.
@@ -116,6 +132,7 @@ struct PixelTracer<'a> {
     camera: &'a Camera,
     settings: &'a Settings,
     frame: u64,
+    stop: &'a AtomicBool,
 }
 
 impl PixelTracer<'_> {
@@ -142,7 +159,11 @@ impl PixelTracer<'_> {
             .enumerate()
             .for_each(|(row, (rgb_row, spread_row))| {
                 let (mut n, mut bad, mut cast) = (0, 0, 0);
-                for col in (0..w).filter(|col| select(row * w + col)) {
+                let go_on = || !self.stop.load(Ordering::Relaxed);
+                for col in (0..w)
+                    .filter(|col| select(row * w + col))
+                    .take_while(|_| go_on())
+                {
                     let px = &mut rgb_row[3 * col..3 * col + 3];
                     let (sum, range, count) =
                         self.pixel(row as u32, col as u32, samples, &mut cast);
@@ -186,7 +207,7 @@ impl PixelTracer<'_> {
             Samples::More { have, total } => (have, total),
         };
         let (mut sum, mut lo, mut hi) = (DVec3::ZERO, DVec3::INFINITY, DVec3::NEG_INFINITY);
-        for k in first..end {
+        for k in (first..end).take_while(|_| !self.stop.load(Ordering::Relaxed)) {
             let (u, v) = match (samples, s.sampler) {
                 (Samples::More { .. }, _) => sample::r2(self.frame, index, k),
                 (Samples::All(n), Sampler::Stratified) => sample::offset(self.frame, index, k, n),
