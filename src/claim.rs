@@ -13,6 +13,7 @@
 use crate::output::atomic::{alive, hostname, sidecar};
 use std::fs::{self, OpenOptions};
 use std::io::Write;
+use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, SystemTime};
 
@@ -140,7 +141,12 @@ impl Claims {
     /// Shows the owner is alive: refreshes the claim's modification time.
     pub fn heartbeat(&self, frame: &Path) {
         let path = Claims::path(frame);
-        if let Ok(f) = OpenOptions::new().append(true).open(&path) {
+        // Never through a link someone put in the claim's place.
+        let opened = OpenOptions::new()
+            .append(true)
+            .custom_flags(libc::O_NOFOLLOW)
+            .open(&path);
+        if let Ok(f) = opened {
             let _ = f.set_modified(SystemTime::now());
         }
     }
