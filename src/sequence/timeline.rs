@@ -2,8 +2,8 @@
 //! timeline can still deserve, and the check of every frame's camera.
 
 use super::{
-    Check, Invalid, MAX_FPS, MAX_FRAMES, MAX_ROLL_PER_FRAME_DEGREES, fov, got, in_range, invalid,
-    number, positive, raw, unit, vector,
+    Check, Invalid, MAX_FPS, MAX_FRAMES, MAX_ROLL_PER_FRAME_DEGREES, fov, got, got_num, in_range,
+    invalid, num, number, positive, raw, unit, vector,
 };
 use crate::camera::{Camera, Degenerate, Pose};
 use crate::timeline::{
@@ -30,7 +30,7 @@ pub(super) fn timeline(t: &raw::Timeline, camera: Option<Pose>) -> Check<Loaded>
     if fps == 0.0 {
         return invalid(
             "timeline.fps",
-            format!("must be greater than 0 {}", got(fps)),
+            format!("must be greater than 0 {}", got_num(fps)),
         );
     }
     let path = path(t, camera)?;
@@ -82,13 +82,20 @@ fn frame_count(t: &raw::Timeline, path: &TimelinePath, fps: f64) -> Check<u64> {
         return Ok(frames as u64);
     }
     let how = match (t.duration, path) {
-        (Some(d), _) => format!("{d} s × {fps} fps = {frames} frames"),
+        (Some(d), _) => format!("{} s × {} fps = {} frames", num(d), num(fps), num(frames)),
         (None, TimelinePath::Keys(k)) => format!(
-            "ending on the last keyframe at {} s at {fps} fps takes {frames} frames",
-            k.keys.last().expect("non-empty").time
+            "ending on the last keyframe at {} s at {} fps takes {} frames",
+            num(k.keys.last().expect("non-empty").time),
+            num(fps),
+            num(frames)
         ),
         (None, TimelinePath::Orbit(o)) => {
-            format!("{} s × {fps} fps = {frames} frames", o.duration)
+            format!(
+                "{} s × {} fps = {} frames",
+                num(o.duration),
+                num(fps),
+                num(frames)
+            )
         }
     };
     invalid(
@@ -189,8 +196,8 @@ fn keyframes(keys: &[raw::Keyframe], camera: Option<Pose>) -> Check<Vec<Key>> {
                 format!(
                     "keyframe times must increase strictly; keyframe {} is at {} {}",
                     i - 1,
-                    prev.time,
-                    got(time)
+                    num(prev.time),
+                    got_num(time)
                 ),
             );
         }
