@@ -7,7 +7,7 @@
 
 use crate::tracer::lanes::{F64x1, Lanes};
 use crate::tracer::vec3::V3;
-use glam::DVec3;
+use glam::{DMat4, DVec3};
 
 /// Where the camera is and where it looks, as the sequence file and the timeline give it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,6 +97,29 @@ impl Camera {
         let (x, y) = (x * s, y * s);
         (V3::splat(self.forward) + V3::splat(self.right) * x + V3::splat(self.up) * y).normalize()
     }
+
+    /// OpenEXR's `worldToCamera` and `worldToNDC` for a width×height image, row-major for row
+    /// vectors (p′ = p·M, translation in the last row). Camera space is OpenEXR's (RenderMan's):
+    /// left-handed, x right, y up, z along the view; NDC has (0, 0) at the top left corner of
+    /// the image and (1, 1) at the bottom right, after dividing by w = camera z.
+    pub fn exr_matrices(&self, width: u32, height: u32) -> [DMat4; 2] {
+        let (r, u, f, o) = (self.right, self.up, self.forward, self.origin);
+        let world_to_camera = DMat4::from_cols_array_2d(&[
+            [r.x, u.x, f.x, 0.0],
+            [r.y, u.y, f.y, 0.0],
+            [r.z, u.z, f.z, 0.0],
+            [-o.dot(r), -o.dot(u), -o.dot(f), 1.0],
+        ]);
+        let (s, aspect) = (self.tan_half_fov, f64::from(width) / f64::from(height));
+        let camera_to_ndc = DMat4::from_cols_array_2d(&[
+            [0.5 / s, 0.0, 0.0, 0.0],
+            [0.0, -0.5 * aspect / s, 0.0, 0.0],
+            [0.5, 0.5, 0.0, 1.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ]);
+        // Rows stored as glam columns: the product of row-vector matrices A·B is B·A here.
+        [world_to_camera, camera_to_ndc * world_to_camera]
+    }
 }
 
 /// Screen coordinates of the point (u, v) ∈ [0,1)² inside pixel (row, col) of a width×height image.
@@ -146,6 +169,33 @@ mod tests {
         let want = (DVec3::new(x, y, 0.0) - DVec3::new(0.0, 0.0, 1.0)).normalize();
         assert!((d - want).length() < 1e-15, "{d} vs {want}");
         assert_eq!(cam.right, DVec3::X);
+    }
+
+    /// A point projected through worldToNDC lands where the pixel whose eye ray passes
+    /// through it is; worldToCamera puts the camera at the origin looking along +z.
+    #[test]
+    fn exr_matrices_follow_the_pixels() {
+        let pose = Pose {
+            position: DVec3::new(1.0, 2.0, 3.0),
+            look_at: DVec3::new(-1.0, 0.5, -2.0),
+            up: DVec3::new(0.1, 1.0, 0.0),
+            fov: 70.0,
+        };
+        let cam = Camera::new(&pose).unwrap();
+        let [to_camera, to_ndc] = cam.exr_matrices(64, 36);
+        let row = |m: DMat4, p: DVec3| m.mul_vec4(p.extend(1.0));
+        let c = row(to_camera, pose.position);
+        assert!(c.truncate().length() < 1e-12);
+        let ahead = row(to_camera, pose.position + cam.forward * 5.0);
+        assert!((ahead.truncate() - DVec3::new(0.0, 0.0, 5.0)).length() < 1e-12);
+        for (i, j) in [(0u32, 0u32), (10, 50), (35, 63)] {
+            let (x, y) = screen_point(i, j, 0.5, 0.5, 64, 36);
+            let p = pose.position + cam.direction(x, y) * 7.0;
+            let n = row(to_ndc, p);
+            let (nx, ny) = (n.x / n.w, n.y / n.w);
+            assert!((nx - (f64::from(j) + 0.5) / 64.0).abs() < 1e-12, "{nx}");
+            assert!((ny - (f64::from(i) + 0.5) / 36.0).abs() < 1e-12, "{ny}");
+        }
     }
 
     #[test]

@@ -5,6 +5,7 @@ use crate::output::exr::Precision;
 use crate::output::png::Compression;
 use crate::output::stream::StreamFormat;
 use crate::sequence::Quality;
+use crate::transfer::Encoding;
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
@@ -108,6 +109,9 @@ pub struct MeasureArgs {
     /// Timed runs per setting; the median is reported, with min and max.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=100))]
     pub runs: u64,
+    /// Encoding of the 8-bit values errors are measured on (default: the sequence's).
+    #[arg(long, value_enum)]
+    pub encoding: Option<Encoding>,
     /// Directory for measure.csv, measure.json and measure.svg (default: frames/NAME/measure).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -170,9 +174,18 @@ pub struct JobArgs {
     /// PNG compression level.
     #[arg(long, value_name = "LEVEL", value_enum, default_value_t = Compression::Fast)]
     pub png_compression: Compression,
-    /// Add a Z channel (eye-ray distance) to EXR files (same as render.depth: true).
+    /// Add a Z channel (planar depth) to EXR files (same as render.depth: true).
     #[arg(long)]
     pub depth: bool,
+    /// How PNG and stream values encode the linear colour (replaces render.encoding).
+    #[arg(long, value_enum)]
+    pub encoding: Option<Encoding>,
+    /// Exposure in stops: the colour is multiplied by 2^STOPS (replaces render.exposure).
+    #[arg(long, value_name = "STOPS", allow_negative_numbers = true)]
+    pub exposure: Option<f64>,
+    /// Coverage as alpha: RGBA PNGs and streams, an A channel in EXR (as render.alpha: true).
+    #[arg(long)]
+    pub alpha: bool,
 }
 
 #[derive(Debug, Args)]

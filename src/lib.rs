@@ -18,6 +18,7 @@ pub mod schedule;
 pub mod sequence;
 pub mod timeline;
 pub mod tracer;
+pub mod transfer;
 
 mod commands;
 

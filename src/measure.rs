@@ -7,6 +7,7 @@ use crate::frame::Frame;
 use crate::schedule::render_with;
 use crate::sequence::{Quality, Sequence, preset};
 use crate::tracer::{Adaptive, Sampler, Settings, World};
+use crate::transfer::Encoding;
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -81,6 +82,7 @@ pub fn reference_settings(base: &Settings) -> Settings {
         max_depth: REFERENCE_DEPTH,
         sampler: Sampler::Stratified,
         depth: false,
+        alpha: false,
         ..*base
     }
 }
@@ -93,6 +95,7 @@ pub fn ladder(base: &Settings) -> Vec<(&'static str, String, Settings, bool)> {
         adaptive,
         max_depth,
         depth: false,
+        alpha: false,
         sampler: Sampler::Stratified,
         ..*base
     };
@@ -182,6 +185,9 @@ fn spread(mut t: Vec<f64>) -> [f64; 3] {
 }
 
 pub struct Report {
+    /// The encoding of the 8-bit values the errors are measured on: the sequence's, so the
+    /// figures are the differences a viewer of its frames sees.
+    pub encoding: Encoding,
     pub reference_seconds: f64,
     /// Error of a reference with half the samples, against the reference.
     pub convergence: Error,
@@ -224,6 +230,7 @@ pub fn measure(
         });
     }
     Ok(Report {
+        encoding: seq.settings.encoding,
         reference_seconds,
         convergence,
         rows,
@@ -233,7 +240,12 @@ pub fn measure(
 impl Report {
     pub fn table(&self) -> String {
         let mut s = format!(
-            "{:<24} {:>9} {:>9} {:>9} {:>8} {:>8} {:>7} {:>4} {:>7}\n",
+            "errors on the 8-bit {} values of each frame (render.encoding)\n",
+            self.encoding.name()
+        );
+        let _ = writeln!(
+            s,
+            "{:<24} {:>9} {:>9} {:>9} {:>8} {:>8} {:>7} {:>4} {:>7}",
             "settings", "spp", "time s", "speed-up", "rmse", "psnr dB", "max", "", ">1/255"
         );
         for r in &self.rows {
@@ -275,6 +287,7 @@ impl Report {
                     ("psnr_db", format!("{:.3}", finite_or(r.error.psnr, 999.0))),
                     ("max_error", r.error.max.to_string()),
                     ("share_off", format!("{:.6}", r.error.off)),
+                    ("encoding", format!("\"{}\"", self.encoding.name())),
                 ]
             })
             .collect()

@@ -56,6 +56,7 @@ pub fn plan(seq: &Sequence, frames: &FrameSet, files: &Files, force: bool) -> Pl
         width: seq.settings.width,
         height: seq.settings.height,
         format: files.format,
+        alpha: seq.settings.alpha,
     };
     let mut previous = None;
     for chunk in present.chunks(CHUNK) {

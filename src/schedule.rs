@@ -407,6 +407,9 @@ pub fn frame_meta(seq: &Sequence, n: u64, run_hash: &fingerprint::Hasher) -> Fra
         time: seq.timeline.time_of(n),
         fps: seq.timeline.fps,
         fingerprint: fingerprint::of_frame(run_hash, &seq.timeline.pose_of(n)),
+        matrices: Camera::new(&seq.timeline.pose_of(n))
+            .ok()
+            .map(|c| c.exr_matrices(seq.settings.width, seq.settings.height)),
     }
 }
 

@@ -277,6 +277,15 @@ fn frames_from_every_kernel_equal_the_scalar_kernels() {
     every_kernel_equals_scalar(&tmp, "talk", &["--size", "333x187", "--depth"]);
     every_kernel_equals_scalar(&tmp, "final", &["--size", "161x90", "--quality", "final"]);
     every_kernel_equals_scalar(&tmp, "grid", &["--size", "97x55", "--samples", "9"]);
+    let alpha = [
+        "--size",
+        "161x90",
+        "--quality",
+        "final",
+        "--alpha",
+        "--depth",
+    ];
+    every_kernel_equals_scalar(&tmp, "alpha", &alpha);
     let mut rng = Rng(7);
     let field = scene(&mut rng, 60, 1).replace(
         "camera: { position: [0, 0, 10]",
@@ -284,6 +293,8 @@ fn frames_from_every_kernel_equal_the_scalar_kernels() {
     );
     std::fs::write(tmp.join("seq.yaml"), field).unwrap();
     every_kernel_equals_scalar(&tmp, "field", &["--size", "130x70", "--samples", "5"]);
+    let alpha = ["--size", "130x70", "--alpha", "--exposure", "0.7"];
+    every_kernel_equals_scalar(&tmp, "field-alpha", &alpha);
     let out = run_in(&tmp, &["check", "seq.yaml"]);
     assert!(out.status.success(), "{}", stderr(&out));
 }

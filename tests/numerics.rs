@@ -177,9 +177,14 @@ fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The sequence, with one eye ray through each pixel centre unless `overrides` choose a
+/// sampling: the checks follow single rays.
 fn parse_with(yaml: &str, overrides: &Overrides) -> Sequence {
-    sequence::parse(Path::new("numerics.yaml"), yaml, overrides)
-        .unwrap_or_else(|e| panic!("{e}\n{yaml}"))
+    let mut o = overrides.clone();
+    if o.samples.is_none() && o.quality.is_none() {
+        o.samples = Some(1);
+    }
+    sequence::parse(Path::new("numerics.yaml"), yaml, &o).unwrap_or_else(|e| panic!("{e}\n{yaml}"))
 }
 
 fn parse(yaml: &str) -> Sequence {
@@ -681,7 +686,7 @@ lights:
         for row in 0..h {
             for col in 0..w {
                 let (a, b) = (deep.pixel(row, col), local.pixel(row, col));
-                let hit = depth[(row * w + col) as usize].is_finite();
+                let hit = depth[(row * w + col) as usize] < 1e10;
                 on_sphere += usize::from(hit);
                 for c in 0..3 {
                     // On the sphere: local shading + the background it reflects. Elsewhere:
@@ -813,15 +818,18 @@ lights:
                 },
             );
             let frame = render(&seq, 0, "inside a sphere");
-            for (i, &t) in frame.depth.as_ref().unwrap().iter().enumerate() {
+            let cam = camera_of(&seq, 0);
+            for (i, &z) in frame.depth.as_ref().unwrap().iter().enumerate() {
+                // Z is planar depth: the distance along the ray times its cosine to the view.
+                let ray = eye_ray(&cam, i as u32 / w, i as u32 % w, w, h);
+                let t = f64::from(z) / ray.dir.dot(cam.forward);
                 assert!(
-                    (f64::from(t) - 10.0).abs() <= 1e-5,
+                    (t - 10.0).abs() <= 1e-5 * 10.0 / ray.dir.dot(cam.forward),
                     "centre {center}, fov {fov}, pixel {i}: t = {t}"
                 );
             }
             // And in f64, before the depth buffer's f32 rounding: from the centre exactly 10,
             // from anywhere else inside the true root to a few ulps of the coordinates.
-            let cam = camera_of(&seq, 0);
             let sphere = &seq.scene.objects[0].shape;
             let ulp = f64::EPSILON * (center.abs().max_element() + 10.0);
             let mut worst = 0.0f64;

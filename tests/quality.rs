@@ -9,8 +9,10 @@ use rayreel::sequence::{self, Overrides, Quality};
 use rayreel::tracer::{Adaptive, Sampler, Settings};
 
 fn orbit(size: (u64, u64)) -> rayreel::sequence::Sequence {
+    // One uniform sample to start from: each test sets the sampling it measures.
     let o = Overrides {
         size: Some(size),
+        samples: Some(1),
         ..Overrides::default()
     };
     sequence::load(&repo().join("sequences/orbit.yaml"), &o).unwrap()
@@ -242,7 +244,11 @@ fn measure_writes_csv_json_and_a_plot() {
     let csv = std::fs::read_to_string(tmp.join("m/measure.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     let columns = lines[0].split(',').count();
-    assert_eq!(columns, 12);
+    assert_eq!(columns, 13);
+    assert!(
+        lines[0].ends_with(",encoding") && lines[1].ends_with(",srgb"),
+        "{csv}"
+    );
     assert_eq!(
         lines.len(),
         1 + measure::ladder(&orbit((32, 18)).settings).len()
@@ -251,7 +257,9 @@ fn measure_writes_csv_json_and_a_plot() {
         let cells: Vec<&str> = line.split(',').collect();
         assert_eq!(cells.len(), columns, "{line}");
         assert!(
-            cells[2..].iter().all(|c| c.parse::<f64>().is_ok()),
+            cells[2..columns - 1]
+                .iter()
+                .all(|c| c.parse::<f64>().is_ok()),
             "{line}"
         );
     }

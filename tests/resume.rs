@@ -48,6 +48,7 @@ fn killed_at_any_moment_resumes_to_the_identical_sequence() {
             sixteen_bit: false,
             compression: rayreel::output::png::Compression::Fast,
         },
+        alpha: false,
     };
     for (i, delay_ms) in [30u64, 60, 90, 120, 150, 200, 260, 330, 420, 520, 40, 75]
         .iter()

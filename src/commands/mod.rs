@@ -273,6 +273,7 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
     };
     let o = Overrides {
         size: Some((w, h)),
+        encoding: args.encoding,
         ..Overrides::default()
     };
     seq = sequence::load(&args.file, &o)?;

@@ -23,6 +23,9 @@ fn load(job: &JobArgs) -> Result<(Sequence, FrameSet), Error> {
         depth: job.depth,
         samples: job.samples,
         quality: job.quality,
+        encoding: job.encoding,
+        exposure: job.exposure,
+        alpha: job.alpha,
     };
     let seq = sequence::load(&job.file, &overrides)?;
     let count = seq.timeline.frame_count;
@@ -354,7 +357,8 @@ fn stream_notes(
     print: bool,
 ) {
     let (w, h) = (seq.settings.width, seq.settings.height);
-    let command = output::stream::ffmpeg_command(format, sixteen, w, h, seq.timeline.fps);
+    let depth = (sixteen, seq.settings.alpha);
+    let command = output::stream::ffmpeg_command(format, depth, w, h, seq.timeline.fps);
     if print {
         eprintln!("{command}");
     }

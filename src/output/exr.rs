@@ -1,6 +1,7 @@
 //! OpenEXR frames: the linear, unclamped colour as R, G, B (half floats by default, 32-bit on
-//! request), an optional Z channel (eye-ray distance, +inf for background, always 32-bit), ZIP
-//! compression, and header attributes for the frame number, time, fps and fingerprint.
+//! request), premultiplied by A when the frame has alpha, an optional Z channel (planar depth,
+//! 1e10 for background, always 32-bit), ZIP compression, and header attributes for the
+//! frame number, time, fps, fingerprint and the standard `worldToCamera` and `worldToNDC`.
 
 use super::{Existing, Expected, FileFormat, FrameMeta, fingerprint};
 use crate::frame::Frame;
@@ -30,6 +31,9 @@ pub fn encode(
     for (name, c) in [("R", 0), ("G", 1), ("B", 2)] {
         channels.push(AnyChannel::new(name, samples(plane(c))));
     }
+    if let Some(alpha) = &frame.alpha {
+        channels.push(AnyChannel::new("A", samples(alpha.clone())));
+    }
     if let Some(depth) = &frame.depth {
         channels.push(AnyChannel::new("Z", FlatSamples::F32(depth.clone())));
     }
@@ -47,6 +51,11 @@ pub fn encode(
         AttributeValue::I32(i32::try_from(meta.frame).unwrap_or(i32::MAX)),
     );
     other.insert(Text::from("rayreel:time"), AttributeValue::F64(meta.time));
+    if let Some([to_camera, to_ndc]) = meta.matrices {
+        // glam's columns are the rows OpenEXR stores (row vectors).
+        attributes.world_to_camera = Some(to_camera.to_cols_array().map(|v| v as f32));
+        attributes.world_to_normalized_device = Some(to_ndc.to_cols_array().map(|v| v as f32));
+    }
     let encoding = Encoding {
         compression: Compression::ZIP16,
         blocks: Blocks::ScanLines,
@@ -158,6 +167,12 @@ pub fn inspect(bytes: &[u8], expected: &Expected) -> Existing {
                 )
         })
     };
+    if expected.alpha && !colour("A") {
+        return Existing::Damaged {
+            fingerprint: fingerprint.to_string(),
+            why: "no A channel".into(),
+        };
+    }
     if !["R", "G", "B"].into_iter().all(colour) {
         let kind = if float { "32-bit float" } else { "half" };
         return Existing::Damaged {

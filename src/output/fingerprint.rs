@@ -8,6 +8,7 @@ use crate::camera::Pose;
 use crate::output::FileFormat;
 use crate::scene::Scene;
 use crate::tracer::Settings;
+use crate::transfer::Encoding;
 
 /// Key of the PNG text chunk and the EXR attribute that hold the fingerprint.
 pub const KEY: &str = "rayreel:fingerprint";
@@ -43,6 +44,14 @@ impl Default for Hasher {
 /// The part shared by every frame of a run: version, scene, settings and format. `Debug`
 /// prints every f64 in its shortest round-trip form, which makes it a canonical text.
 pub fn of_run(scene: &Scene, settings: &Settings, format: &FileFormat) -> Hasher {
+    // EXR frames are linear whatever the encoding, which must not make them stale.
+    let settings = match format {
+        FileFormat::Exr { .. } => &Settings {
+            encoding: Encoding::Linear,
+            ..*settings
+        },
+        FileFormat::Png { .. } => settings,
+    };
     let mut h = Hasher::new();
     h.write(concat!("rayreel ", env!("CARGO_PKG_VERSION"), "\n").as_bytes());
     h.write(format!("{scene:?}\n{settings:?}\n{:?}\n", format.content()).as_bytes());

@@ -44,14 +44,15 @@ impl FileFormat {
         }
     }
 
-    /// A PNG frame's bit depth, colour type (2: RGB) and channels per pixel.
-    pub fn png_layout(&self) -> (u8, u8, u64) {
-        match self {
+    /// A PNG frame's bit depth, colour type (2: RGB, 6: RGBA) and channels per pixel.
+    pub fn png_layout(&self, alpha: bool) -> (u8, u8, u64) {
+        let depth = match self {
             FileFormat::Png {
                 sixteen_bit: true, ..
-            } => (16, 2, 3),
-            _ => (8, 2, 3),
-        }
+            } => 16,
+            _ => 8,
+        };
+        if alpha { (depth, 6, 4) } else { (depth, 2, 3) }
     }
 
     /// What decides the decoded content (compression only changes how it is packed).
@@ -72,6 +73,8 @@ pub struct FrameMeta {
     pub time: f64,
     pub fps: f64,
     pub fingerprint: String,
+    /// `worldToCamera` and `worldToNDC` (row-major, row vectors) when the frame has a camera.
+    pub matrices: Option<[glam::DMat4; 2]>,
 }
 
 pub fn encode_file(
@@ -120,6 +123,8 @@ pub struct Expected {
     pub width: u32,
     pub height: u32,
     pub format: FileFormat,
+    /// RGBA PNGs and an A channel in EXR.
+    pub alpha: bool,
 }
 
 pub fn inspect(path: &Path, expected: &Expected) -> Existing {

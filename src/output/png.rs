@@ -1,8 +1,12 @@
-//! PNG encoding: 8-bit (round(255 · clamp(c, 0, 1)), no gamma, as the talk) or 16-bit, with
-//! the fingerprint in a tEXt chunk ahead of the image data; and the check of an existing file.
+//! PNG encoding: 8- or 16-bit RGB (RGBA with alpha, straight as PNG requires) in the frame's
+//! encoding, tagged for colour management (sRGB: `sRGB` with the matching `gAMA` and `cHRM`
+//! for readers that know only those; linear: `gAMA` 1.0), with the fingerprint in a tEXt
+//! chunk ahead of the image data; and the check of an existing file.
 
 use super::{Existing, Expected, fingerprint};
 use crate::frame::Frame;
+use crate::transfer::Encoding;
+use png::{ScaledFloat, SourceChromaticities};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
 pub enum Compression {
@@ -22,7 +26,11 @@ pub fn encode(
 ) -> Result<Vec<u8>, String> {
     let mut out = Vec::with_capacity(frame.rgb.len() / 2);
     let mut enc = png::Encoder::new(&mut out, frame.width, frame.height);
-    enc.set_color(png::ColorType::Rgb);
+    enc.set_color(match frame.alpha {
+        Some(_) => png::ColorType::Rgba,
+        None => png::ColorType::Rgb,
+    });
+    tag_colour(&mut enc, frame.encoding);
     enc.set_compression(match compression {
         Compression::Fast => png::Compression::Fast,
         Compression::Default => png::Compression::Balanced,
@@ -47,6 +55,26 @@ pub fn encode(
     writer.write_image_data(&data).map_err(|e| e.to_string())?;
     writer.finish().map_err(|e| e.to_string())?;
     Ok(out)
+}
+
+/// The colour chunks: sRGB's are written (before PLTE/IDAT, as required) with the gAMA and
+/// cHRM values the PNG specification gives as its fallback; linear values are gamma 1.0 in
+/// the same primaries.
+fn tag_colour<W: std::io::Write>(enc: &mut png::Encoder<W>, encoding: Encoding) {
+    let chroma = |(x, y): (u32, u32)| (ScaledFloat::from_scaled(x), ScaledFloat::from_scaled(y));
+    enc.set_source_chromaticities(SourceChromaticities {
+        white: chroma((31270, 32900)),
+        red: chroma((64000, 33000)),
+        green: chroma((30000, 60000)),
+        blue: chroma((15000, 6000)),
+    });
+    match encoding {
+        Encoding::Srgb => {
+            enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+            enc.set_source_gamma(ScaledFloat::from_scaled(45455));
+        }
+        Encoding::Linear => enc.set_source_gamma(ScaledFloat::from_scaled(100_000)),
+    }
 }
 
 /// Walks the chunks of a PNG file checking every CRC: intact without our fingerprint
@@ -148,7 +176,7 @@ fn check_header(header: &[u8], expected: &Expected) -> Result<(u64, u64), String
         u32::from_be_bytes([w0, w1, w2, w3]),
         u32::from_be_bytes([h0, h1, h2, h3]),
     );
-    let (want_depth, want_color, channels) = expected.format.png_layout();
+    let (want_depth, want_color, channels) = expected.format.png_layout(expected.alpha);
     if (w, h) != (expected.width, expected.height) {
         return Err(format!(
             "the header says {w}x{h}; this job renders {}x{}",

@@ -1,4 +1,5 @@
-//! Frame streams on stdout for ffmpeg: raw rgb24 / rgb48le bytes, or a sequence of PNGs.
+//! Frame streams on stdout for ffmpeg: raw rgb24 / rgb48le bytes (rgba / rgba64le with
+//! alpha), or a sequence of PNGs.
 //! Nothing but frame bytes is ever written here.
 
 use super::png::{self, Compression};
@@ -25,9 +26,21 @@ pub fn encode(frame: &Frame, format: StreamFormat, sixteen_bit: bool) -> Result<
 }
 
 /// The ffmpeg command that reads this stream and makes an H.264 video.
+/// The stream's pixels as ffmpeg names them.
+pub fn pix_fmt(sixteen_bit: bool, alpha: bool) -> &'static str {
+    match (sixteen_bit, alpha) {
+        (false, false) => "rgb24",
+        (true, false) => "rgb48le",
+        (false, true) => "rgba",
+        (true, true) => "rgba64le",
+    }
+}
+
+/// The ffmpeg command that reads this stream: H.264 for colour, or (with alpha, which
+/// H.264 cannot carry) ProRes 4444 with its alpha channel.
 pub fn ffmpeg_command(
     format: StreamFormat,
-    sixteen_bit: bool,
+    (sixteen_bit, alpha): (bool, bool),
     width: u32,
     height: u32,
     fps: f64,
@@ -35,7 +48,7 @@ pub fn ffmpeg_command(
     let input = match format {
         StreamFormat::Raw => format!(
             "-f rawvideo -pix_fmt {} -s {width}x{height} -r {fps}",
-            if sixteen_bit { "rgb48le" } else { "rgb24" }
+            pix_fmt(sixteen_bit, alpha)
         ),
         StreamFormat::Png => format!("-f image2pipe -framerate {fps}"),
     };
@@ -44,5 +57,10 @@ pub fn ffmpeg_command(
     } else {
         ""
     };
-    format!("ffmpeg {input} -i -{pad} -c:v libx264 -pix_fmt yuv420p out.mp4")
+    match alpha {
+        true => format!(
+            "ffmpeg {input} -i - -c:v prores_ks -profile:v 4444 -pix_fmt yuva444p10le out.mov"
+        ),
+        false => format!("ffmpeg {input} -i -{pad} -c:v libx264 -pix_fmt yuv420p out.mp4"),
+    }
 }

@@ -80,12 +80,14 @@ pub fn evenly_spaced(frame_count: u64, n: u64) -> Vec<u64> {
 }
 
 /// The sequence as the contact sheet renders it: the draft preset (1 sample, 2 surfaces per
-/// path, which keeps reflections visible but cheap) at `tile_w`×`tile_h` pixels.
+/// path, which keeps reflections visible but cheap) at `tile_w`×`tile_h` pixels, opaque (the
+/// sheet shows the background), in the file's encoding and exposure.
 pub fn draft(seq: &Sequence, tile_w: u32, tile_h: u32) -> Sequence {
     let mut d = seq.clone();
     crate::sequence::preset(&mut d.settings, crate::sequence::Quality::Draft);
     d.settings.width = tile_w;
     d.settings.height = tile_h;
+    d.settings.alpha = false;
     d
 }
 

@@ -17,6 +17,7 @@ use crate::output::{atomic, pattern::Pattern};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
 use crate::timeline::Timeline;
 use crate::tracer::{Adaptive, Sampler, Settings};
+use crate::transfer::Encoding;
 use glam::DVec3;
 pub use raw::Quality;
 use std::fmt::Display;
@@ -79,6 +80,9 @@ pub struct Overrides {
     pub depth: bool,
     pub samples: Option<u64>,
     pub quality: Option<Quality>,
+    pub encoding: Option<Encoding>,
+    pub exposure: Option<f64>,
+    pub alpha: bool,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -355,6 +359,13 @@ fn apply(seq: &mut Sequence, o: &Overrides) -> Result<(), LoadError> {
         seq.output = out.clone();
     }
     seq.settings.depth |= o.depth;
+    seq.settings.alpha |= o.alpha;
+    if let Some(e) = o.encoding {
+        seq.settings.encoding = e;
+    }
+    if let Some(e) = o.exposure {
+        seq.settings.exposure = exposure(e).map_err(|m| flag("--exposure", m))?;
+    }
     Ok(())
 }
 
@@ -561,7 +572,16 @@ fn render_settings(r: &raw::Render) -> Check<Settings> {
             Some(raw::Sampler::Random) => Sampler::Random,
             _ => Sampler::Stratified,
         },
+        alpha: r.alpha.unwrap_or(false),
+        exposure: match r.exposure {
+            Some(e) => exposure(e).or_else(|m| invalid("render.exposure", m))?,
+            None => 0.0,
+        },
+        encoding: r.encoding.unwrap_or_default(),
     };
+    if r.quality.is_none() && r.samples.is_none() && r.adaptive.is_none() {
+        default_sampling(&mut s);
+    }
     pixels(s.width, s.height).or_else(|m| invalid("render.width", m))?;
     if let Some(q) = r.quality {
         preset(&mut s, q);
@@ -610,6 +630,35 @@ fn render_settings(r: &raw::Render) -> Check<Settings> {
     }
     Ok(s)
 }
+
+/// Largest |render.exposure|, in stops: 2^64 times the brightest colour still fits an f32.
+pub const MAX_EXPOSURE: f64 = 64.0;
+
+fn exposure(v: f64) -> Result<f64, String> {
+    if v.is_finite() && v.abs() <= MAX_EXPOSURE {
+        Ok(v)
+    } else {
+        Err(format!(
+            "must be within ±{MAX_EXPOSURE} stops {}",
+            got_num(v)
+        ))
+    }
+}
+
+/// Sampling of a file that sets none (no `samples`, `adaptive` or `quality`): antialiased
+/// frames at about the cost one sample had before the packet tracer (see the README).
+fn default_sampling(s: &mut Settings) {
+    s.samples = DEFAULT_SAMPLES;
+    s.adaptive = Some(Adaptive {
+        threshold: DEFAULT_THRESHOLD as f32,
+        max_samples: DEFAULT_SAMPLING_MAX,
+    });
+}
+
+/// `render.samples` when a file sets no sampling.
+pub const DEFAULT_SAMPLES: u32 = 4;
+/// `render.adaptive.max_samples` when a file sets no sampling.
+pub const DEFAULT_SAMPLING_MAX: u32 = 16;
 
 /// Default `render.adaptive.threshold`: a linear colour difference of about 8/255.
 pub const DEFAULT_THRESHOLD: f64 = 0.03;

@@ -35,6 +35,9 @@ pub struct Render {
     pub adaptive: Option<Adaptive>,
     pub quality: Option<Quality>,
     pub sampler: Option<Sampler>,
+    pub encoding: Option<crate::transfer::Encoding>,
+    pub exposure: Option<f64>,
+    pub alpha: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -7,7 +7,7 @@
 
 use super::World;
 use super::intersect::Ray;
-use super::rows::{self, Pass, RowOut};
+use super::rows::{self, Old, Pass, RowOut};
 use glam::DVec3;
 use std::sync::OnceLock;
 
@@ -111,22 +111,22 @@ impl Kernel {
         }
     }
 
-    /// Adds samples to the `pixels` of a frame whose means are `rgb`; new means into `out`.
+    /// Adds samples to the `pixels` of a frame whose means are `old`; new means into `out`.
     pub(super) fn marked(
         self,
         pass: &Pass,
         pixels: &[u32],
-        rgb: &[f32],
-        out: &mut [[f32; 3]],
+        old: Old,
+        out: &mut [[f32; 4]],
     ) -> rows::RowStats {
         match self {
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 if self.supported() => unsafe { x86::marked_avx2(pass, pixels, rgb, out) },
+            Kernel::Avx2 if self.supported() => unsafe { x86::marked_avx2(pass, pixels, old, out) },
             #[cfg(target_arch = "x86_64")]
             Kernel::Avx512 if self.supported() => unsafe {
-                x86::marked_avx512(pass, pixels, rgb, out)
+                x86::marked_avx512(pass, pixels, old, out)
             },
-            _ => rows::marked::<super::lanes::F64x1>(pass, pixels, rgb, out),
+            _ => rows::marked::<super::lanes::F64x1>(pass, pixels, old, out),
         }
     }
 
@@ -146,7 +146,7 @@ impl Kernel {
 mod x86 {
     use super::super::lanes::Pair;
     use super::super::lanes::x86::{F64x4, F64x8};
-    use super::rows::{self, Pass, RowOut, RowStats};
+    use super::rows::{self, Old, Pass, RowOut, RowStats};
     use crate::tracer::World;
     use crate::tracer::intersect::Ray;
     use glam::DVec3;
@@ -168,20 +168,20 @@ mod x86 {
     pub(super) unsafe fn marked_avx2(
         pass: &Pass,
         pixels: &[u32],
-        rgb: &[f32],
-        out: &mut [[f32; 3]],
+        old: Old,
+        out: &mut [[f32; 4]],
     ) -> RowStats {
-        rows::marked::<Avx2Packet>(pass, pixels, rgb, out)
+        rows::marked::<Avx2Packet>(pass, pixels, old, out)
     }
 
     #[target_feature(enable = "avx512f")]
     pub(super) unsafe fn marked_avx512(
         pass: &Pass,
         pixels: &[u32],
-        rgb: &[f32],
-        out: &mut [[f32; 3]],
+        old: Old,
+        out: &mut [[f32; 4]],
     ) -> RowStats {
-        rows::marked::<Avx512Packet>(pass, pixels, rgb, out)
+        rows::marked::<Avx512Packet>(pass, pixels, old, out)
     }
 
     #[target_feature(enable = "avx2")]

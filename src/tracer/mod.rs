@@ -16,9 +16,10 @@ pub mod vec3;
 use crate::camera::Camera;
 use crate::frame::Frame;
 use crate::scene::Scene;
+use crate::transfer::Encoding;
 pub use kernel::Kernel;
 use rayon::prelude::*;
-use rows::{Pass, RowOut, RowStats};
+use rows::{Pass, Planes, RowOut, RowStats};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What decides a frame besides the scene and the camera.
@@ -34,6 +35,12 @@ pub struct Settings {
     pub samples: u32,
     pub adaptive: Option<Adaptive>,
     pub sampler: Sampler,
+    /// Record coverage (alpha): eye rays that miss add nothing instead of the background.
+    pub alpha: bool,
+    /// Stops: the colour is multiplied by 2^exposure.
+    pub exposure: f64,
+    /// How the frame's integer values encode its colour (the tracer only passes it on).
+    pub encoding: Encoding,
 }
 
 /// Adaptive sampling: every pixel gets `samples`; pixels whose samples disagree, or whose
@@ -104,6 +111,7 @@ fn render_frame(
 ) -> Option<Frame> {
     let (w, h) = (settings.width as usize, settings.height as usize);
     let mut rgb = crate::frame::buffer(3 * w * h);
+    let mut alpha = settings.alpha.then(|| crate::frame::buffer(w * h));
     let mut spread = vec![
         0f32;
         if settings.adaptive.is_some() {
@@ -122,9 +130,13 @@ fn render_frame(
         from_origin: &from_origin,
         stop,
     };
-    let mut stats = run_pass(kernel, &first, &mut rgb, &mut spread);
+    let mut planes = Planes {
+        rgb: &mut rgb,
+        alpha: alpha.as_deref_mut(),
+    };
+    let mut stats = run_pass(kernel, &first, &mut planes, &mut spread);
     if let Some(a) = settings.adaptive {
-        let marked = mark(&rgb, &spread, w, h, a.threshold);
+        let marked = mark(planes.rgb, &spread, w, h, a.threshold);
         let more = Pass {
             samples: Samples::More {
                 have: settings.samples,
@@ -132,7 +144,10 @@ fn render_frame(
             },
             ..first
         };
-        stats = stats + extend(kernel, &more, &marked, &mut rgb);
+        stats = stats + extend(kernel, &more, &marked, &mut planes);
+    }
+    if settings.exposure != 0.0 {
+        expose(&mut rgb, settings.exposure);
     }
     let depth = settings.depth.then(|| {
         let mut depth = crate::frame::buffer(w * h);
@@ -150,6 +165,8 @@ fn render_frame(
         height: settings.height,
         rgb,
         depth,
+        alpha,
+        encoding: settings.encoding,
         non_finite: stats.non_finite,
         samples: stats.samples,
         rays: stats.rays,
@@ -168,45 +185,67 @@ enum Samples {
 
 /// Runs `pass` over every band of rows in parallel; fills `spread` (when not empty) with each
 /// pixel's largest channel range.
-fn run_pass(kernel: Kernel, pass: &Pass, rgb: &mut [f32], spread: &mut [f32]) -> RowStats {
+fn run_pass(kernel: Kernel, pass: &Pass, planes: &mut Planes, spread: &mut [f32]) -> RowStats {
     let rows = kernel.band_rows();
     let w = pass.settings.width as usize;
     let bands = (pass.settings.height as usize).div_ceil(rows);
-    let mut spreads: Vec<Option<&mut [f32]>> = if spread.is_empty() {
-        (0..bands).map(|_| None).collect()
-    } else {
-        spread.chunks_mut(w * rows).map(Some).collect()
-    };
-    rgb.par_chunks_mut(3 * w * rows)
+    let mut spreads = in_bands((!spread.is_empty()).then_some(spread), w * rows, bands);
+    let mut alphas = in_bands(planes.alpha.as_deref_mut(), w * rows, bands);
+    planes
+        .rgb
+        .par_chunks_mut(3 * w * rows)
         .zip(spreads.par_iter_mut())
+        .zip(alphas.par_iter_mut())
         .enumerate()
-        .map(|(band, (rgb, spread))| {
+        .map(|(band, ((rgb, spread), alpha))| {
             let out = RowOut {
                 rgb,
                 spread: spread.as_deref_mut(),
+                alpha: alpha.as_deref_mut(),
             };
             kernel.band(pass, (band * rows) as u32, out)
         })
         .reduce(RowStats::default, |a, b| a + b)
 }
 
+/// A per-pixel buffer cut into the bands' parts, or `bands` Nones without one.
+fn in_bands(buffer: Option<&mut [f32]>, band: usize, bands: usize) -> Vec<Option<&mut [f32]>> {
+    match buffer {
+        Some(b) => b.chunks_mut(band).map(Some).collect(),
+        None => (0..bands).map(|_| None).collect(),
+    }
+}
+
 /// Adds samples to the marked pixels, packed in raster order across rows so packets stay
 /// full however sparse the marks are.
-fn extend(kernel: Kernel, pass: &Pass, marked: &[bool], rgb: &mut [f32]) -> RowStats {
+fn extend(kernel: Kernel, pass: &Pass, marked: &[bool], planes: &mut Planes) -> RowStats {
     let pixels: Vec<u32> = (0..marked.len() as u32)
         .filter(|&i| marked[i as usize])
         .collect();
-    let mut means = vec![[0f32; 3]; pixels.len()];
+    let mut means = vec![[0f32; 4]; pixels.len()];
+    let (rgb, alpha) = (&*planes.rgb, planes.alpha.as_deref());
     // Tasks of 256 pixels: a whole number of packets of every width.
     let stats = means
         .par_chunks_mut(256)
         .zip(pixels.par_chunks(256))
-        .map(|(out, pixels)| kernel.marked(pass, pixels, rgb, out))
+        .map(|(out, pixels)| kernel.marked(pass, pixels, (rgb, alpha), out))
         .reduce(RowStats::default, |a, b| a + b);
     for (&p, m) in pixels.iter().zip(&means) {
-        rgb[3 * p as usize..][..3].copy_from_slice(m);
+        planes.rgb[3 * p as usize..][..3].copy_from_slice(&m[..3]);
+        if let Some(alpha) = planes.alpha.as_deref_mut() {
+            alpha[p as usize] = m[3];
+        }
     }
     stats
+}
+
+/// 2^stops (libm's exp2, rounded to f32) times every channel, in f32; a product beyond f32
+/// stays at f32::MAX, as the tracer's own colours do.
+fn expose(rgb: &mut [f32], stops: f64) {
+    let scale = libm::exp2(stops) as f32;
+    for c in rgb {
+        *c = (*c * scale).clamp(-f32::MAX, f32::MAX);
+    }
 }
 
 /// Pixels that need more samples: their own samples disagree, or they stand out from their

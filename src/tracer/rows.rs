@@ -13,6 +13,7 @@ use super::vec3::V3;
 use super::{Sampler, Samples, Settings, World, finite};
 use crate::camera::{Camera, screen_points};
 use glam::DVec3;
+use std::ops::{Add, Div, Mul};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Everything one pass over a frame needs, shared by its packets.
@@ -34,11 +35,21 @@ impl Pass<'_> {
     }
 }
 
-/// One row's slice of the frame: 3 floats per pixel, and each pixel's sample spread (the
-/// largest channel range) when the pass records it.
+/// A frame's colour, 3 floats per pixel, and its coverage when the settings ask for alpha.
+pub(super) struct Planes<'a> {
+    pub rgb: &'a mut [f32],
+    pub alpha: Option<&'a mut [f32]>,
+}
+
+/// A frame's colour and coverage as they are before a pass extends some pixels.
+pub(super) type Old<'a> = (&'a [f32], Option<&'a [f32]>);
+
+/// One band's slice of the frame: 3 floats per pixel, each pixel's sample spread (the
+/// largest channel range) when the pass records it, and its coverage with alpha.
 pub(super) struct RowOut<'a> {
     pub rgb: &'a mut [f32],
     pub spread: Option<&'a mut [f32]>,
+    pub alpha: Option<&'a mut [f32]>,
 }
 
 #[derive(Debug, Default, Clone, Copy)]
@@ -101,10 +112,12 @@ pub(super) const fn tile_rows(n: usize) -> usize {
     }
 }
 
-/// What a packet found for its pixels: the f32 means (already made finite) and spreads.
+/// What a packet found for its pixels: the f32 means (already made finite), spreads and
+/// coverage (0 without alpha).
 struct Means {
     rgb: [[f32; 3]; 16],
     spread: [f32; 16],
+    alpha: [f32; 16],
 }
 
 /// A pass that traces every pixel of a band of `tile_rows(V::N)` rows starting at `top` (the
@@ -112,7 +125,11 @@ struct Means {
 #[inline(always)]
 pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
     let w = pass.settings.width;
-    let RowOut { rgb, mut spread } = out;
+    let RowOut {
+        rgb,
+        mut spread,
+        mut alpha,
+    } = out;
     let rows = (rgb.len() / (3 * w as usize)) as u32;
     let tile_w = (V::N / tile_rows(V::N)) as u32;
     let mut stats = RowStats::default();
@@ -131,19 +148,23 @@ pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
             if let Some(spread) = spread.as_deref_mut() {
                 spread[i] = means.spread[k];
             }
+            if let Some(alpha) = alpha.as_deref_mut() {
+                alpha[i] = means.alpha[k];
+            }
         }
     }
     stats
 }
 
 /// A pass that adds samples to the pixels `marked` (row-major indices) of a frame whose
-/// current means are `rgb`; writes their new means to `out`, one per marked pixel.
+/// current means are `rgb` (and coverage `alpha`); writes their new means, coverage fourth,
+/// to `out`, one per marked pixel.
 #[inline(always)]
 pub(super) fn marked<V: Lanes>(
     pass: &Pass,
     marked: &[u32],
-    rgb: &[f32],
-    out: &mut [[f32; 3]],
+    (rgb, alpha): Old,
+    out: &mut [[f32; 4]],
 ) -> RowStats {
     let w = pass.settings.width;
     let mut stats = RowStats::default();
@@ -152,12 +173,16 @@ pub(super) fn marked<V: Lanes>(
             break;
         }
         let packet_pixels = Pixels::new(|k| pixels.get(k).map(|&p| (p / w, p % w)));
-        let old: [[f32; 3]; 16] = std::array::from_fn(|k| {
-            let i = 3 * pixels[k.min(pixels.len() - 1)] as usize;
-            [rgb[i], rgb[i + 1], rgb[i + 2]]
+        let old: [[f32; 4]; 16] = std::array::from_fn(|k| {
+            let p = pixels[k.min(pixels.len() - 1)] as usize;
+            let a = alpha.map_or(0.0, |a| a[p]);
+            [rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2], a]
         });
         let means = packet::<V>(pass, &packet_pixels, Some(&old), false, &mut stats);
-        out.copy_from_slice(&means.rgb[..pixels.len()]);
+        for (k, o) in out.iter_mut().enumerate() {
+            let c = means.rgb[k];
+            *o = [c[0], c[1], c[2], means.alpha[k]];
+        }
     }
     stats
 }
@@ -170,7 +195,7 @@ pub(super) fn marked<V: Lanes>(
 fn packet<V: Lanes>(
     pass: &Pass,
     px: &Pixels,
-    old: Option<&[[f32; 3]; 16]>,
+    old: Option<&[[f32; 4]; 16]>,
     spread: bool,
     stats: &mut RowStats,
 ) -> Means {
@@ -194,6 +219,7 @@ fn packet<V: Lanes>(
     let row = V::from_fn(|k| f64::from(px.rows[k]));
     let col = V::from_fn(|k| f64::from(px.cols[k]));
     let mut sum = V3::<V>::zero();
+    let (mut cover, one, zero) = (V::splat(0.0), V::splat(1.0), V::splat(0.0));
     let (mut lo, mut hi) = (
         V3::<V>::splat(DVec3::INFINITY),
         V3::<V>::splat(DVec3::NEG_INFINITY),
@@ -208,9 +234,13 @@ fn packet<V: Lanes>(
             },
             active: V::M::from_bits(px.valid),
             from_origin: Some(pass.from_origin),
+            transparent: s.alpha,
         };
-        let c = shade::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays);
+        let (c, covered) = shade::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays);
         sum = sum + c;
+        if s.alpha {
+            cover = cover + V::select(covered, one, zero);
+        }
         if range {
             lo = V3 {
                 x: lo.x.min(c.x),
@@ -227,26 +257,62 @@ fn packet<V: Lanes>(
     let mut means = Means {
         rgb: [[0.0; 3]; 16],
         spread: [0.0; 16],
+        alpha: [0.0; 16],
     };
     if range {
         let d = hi - lo;
         d.x.max(d.y).max(d.z).store_f32(&mut means.spread);
     }
-    let mean = match (pass.samples, old) {
+    let (old_rgb, old_alpha) = match old {
+        Some(o) => (
+            Some(V3::from_fn(|k| {
+                DVec3::from_array([0, 1, 2].map(|c| f64::from(o[k][c])))
+            })),
+            Some(V::from_fn(|k| f64::from(o[k][3]))),
+        ),
+        None => (None, None),
+    };
+    let mean = mean_of::<V, _>(pass.samples, sum, old_rgb);
+    finish(mean, px, &mut means.rgb, stats);
+    if s.alpha {
+        mean_of::<V, V>(pass.samples, cover, old_alpha).store_f32(&mut means.alpha);
+        if range {
+            edge_spread(&mut means, end - first);
+        }
+    }
+    stats.samples += u64::from(end - first) * u64::from(px.valid.count_ones());
+    means
+}
+
+/// The mean of a pixel's samples: `sum` over this pass's samples, and when the pass extends
+/// a pixel, the f32 mean `old` it had; for colours and coverage alike.
+#[inline(always)]
+fn mean_of<V: Lanes, T>(samples: Samples, sum: T, old: Option<T>) -> T
+where
+    T: Add<Output = T> + Mul<V, Output = T> + Div<V, Output = T>,
+{
+    match (samples, old) {
         // x / 1 = x exactly: one sample needs no division.
         (Samples::All(1), _) => sum,
+        // Each pixel folds in the f32 mean it already had.
         (Samples::More { have, total }, Some(old)) => {
-            // Each pixel folds in the f32 mean it already had.
-            let old = V3::from_fn(|k| DVec3::from(old[k].map(f64::from)));
             (old * V::splat(f64::from(have)) + sum) / V::splat(f64::from(total))
         }
         (Samples::All(n), _) | (Samples::More { total: n, .. }, None) => {
             sum / V::splat(f64::from(n))
         }
-    };
-    finish(mean, px, &mut means.rgb, stats);
-    stats.samples += u64::from(end - first) * u64::from(px.valid.count_ones());
-    means
+    }
+}
+
+/// A pixel whose eye rays partly hit and partly missed is an edge of the coverage: its spread
+/// is at least 1 (above any threshold), so adaptive sampling refines alpha edges too, even
+/// where colour alone would not show them (a black object).
+fn edge_spread(means: &mut Means, n: u32) {
+    for (spread, &a) in means.spread.iter_mut().zip(&means.alpha) {
+        if n > 1 && a > 0.0 && a < 1.0 {
+            *spread = spread.max(1.0);
+        }
+    }
 }
 
 /// Each lane's mean as f32. When every value is within ±f32::MAX (the usual case, checked in
@@ -294,11 +360,17 @@ fn eye_directions<V: Lanes>(pass: &Pass, row: V, col: V, u: V, v: V) -> V3<V> {
     pass.camera.directions(x, y)
 }
 
-/// Distance along each pixel centre's eye ray to the first hit (+inf for background).
+/// Background `Z`: far beyond any scene a compositor meets, yet finite, so arithmetic on the
+/// channel (`oiiotool --mulc 0`, a fog ramp) never makes NaN or Inf. Blender's value.
+pub const FAR: f32 = 1e10;
+
+/// `Z` of each pixel centre's eye ray: the first hit's planar depth t·(d·forward), the
+/// camera-space z of `worldToCamera`, as f32 and at most `FAR`; `FAR` for background.
 #[inline(always)]
 pub(super) fn depth<V: Lanes>(pass: &Pass, row: u32, out: &mut [f32]) {
     let w = pass.settings.width as usize;
     let half = V::splat(0.5);
+    let forward = V3::splat(pass.camera.forward);
     for first in (0..w).step_by(V::N) {
         let n = V::N.min(w - first);
         let col = V::from_fn(|k| (first + k.min(n - 1)) as f64);
@@ -311,12 +383,12 @@ pub(super) fn depth<V: Lanes>(pass: &Pass, row: u32, out: &mut [f32]) {
             .world
             .geometry
             .nearest(&rays, Some(pass.from_origin), V::M::first(n));
-        let t = hit.t.array();
+        let z = (hit.t * rays.dir.dot(forward)).array();
         for k in 0..n {
             out[first + k] = if hit.hit.lane(k) {
-                t[k] as f32
+                (z[k] as f32).min(FAR)
             } else {
-                f32::INFINITY
+                FAR
             };
         }
     }
@@ -342,8 +414,9 @@ pub(super) fn rays<V: Lanes>(
             },
             active: V::M::first(chunk.len()),
             from_origin: None,
+            transparent: false,
         };
-        let c = shade::trace_packet(world, &eye, max_depth, &mut cast);
+        let (c, _) = shade::trace_packet(world, &eye, max_depth, &mut cast);
         for (k, o) in out.iter_mut().enumerate() {
             *o = c.lane(k);
         }

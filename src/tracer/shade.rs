@@ -28,6 +28,9 @@ pub struct Eye<'a, V: Lanes> {
     pub rays: Rays<V>,
     pub active: V::M,
     pub from_origin: Option<&'a [FromOrigin]>,
+    /// Eye rays that miss add nothing (a transparent background, for alpha); reflection rays
+    /// that miss still see the background.
+    pub transparent: bool,
 }
 
 /// Follows one eye ray through at most `max_depth` surfaces; returns its colour (the one-lane
@@ -41,33 +44,39 @@ pub fn trace(world: &World, eye: Ray, max_depth: u32) -> DVec3 {
         },
         active: true,
         from_origin: None,
+        transparent: false,
     };
-    trace_packet(world, &eye, max_depth, &mut 0).lane(0)
+    trace_packet(world, &eye, max_depth, &mut 0).0.lane(0)
 }
 
 /// Follows each lane's eye ray through at most `max_depth` surfaces; returns its colour and
-/// adds the rays cast (eye, reflection and shadow rays) to `rays`.
+/// the lanes whose eye ray hit something, and adds the rays cast (eye, reflection and shadow
+/// rays) to `rays`.
 #[inline(always)]
 pub fn trace_packet<V: Lanes>(
     world: &World,
     eye: &Eye<V>,
     max_depth: u32,
     rays: &mut u64,
-) -> V3<V> {
+) -> (V3<V>, V::M) {
     let background = V3::splat(world.scene.background);
     let mut ray = eye.rays;
     let mut active = eye.active;
     let mut color = V3::zero();
     let mut weight = V::splat(1.0);
+    let mut covered = V::M::none_set();
     for depth in 0..max_depth {
         *rays += active.count();
         let from_origin = if depth == 0 { eye.from_origin } else { None };
         let hit = world.geometry.nearest(&ray, from_origin, active);
         let missed = active.andnot(hit.hit);
-        if missed.any() {
+        if missed.any() && !(depth == 0 && eye.transparent) {
             color = V3::select(missed, color + background * weight, color);
         }
         active = hit.hit;
+        if depth == 0 {
+            covered = hit.hit;
+        }
         if !active.any() {
             break;
         }
@@ -90,7 +99,7 @@ pub fn trace_packet<V: Lanes>(
             leaving: hit.object,
         };
     }
-    color
+    (color, covered)
 }
 
 /// What shading needs to know about the objects the lanes hit.

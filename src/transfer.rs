@@ -1,0 +1,188 @@
+//! Transfer functions from the tracer's linear colour to the integer values of PNG files and
+//! streams (`render.encoding`). The sRGB curve is evaluated exactly: an output level is the
+//! number of thresholds at or below the value, and each threshold is the smallest f32 at which
+//! the exact real curve (IEC 61966-2-1 with its decimal constants) reaches the level's halfway
+//! point. So no pow of any library, and no evaluation order, can change a byte.
+
+use std::sync::OnceLock;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Encoding {
+    /// The sRGB transfer function, as viewers and video players expect.
+    #[default]
+    Srgb,
+    /// The linear value itself (the talk's images).
+    Linear,
+}
+
+impl Encoding {
+    pub fn name(self) -> &'static str {
+        match self {
+            Encoding::Srgb => "srgb",
+            Encoding::Linear => "linear",
+        }
+    }
+}
+
+/// The sRGB curve of one bit depth as a lookup: `thresholds[k]` is where level k + 1 starts
+/// (a last +inf stops the scan), and `start[b]` the level at the bottom of bucket b, the
+/// values sharing their exponent and top mantissa bits. A bucket is narrower than a level near
+/// 1, so the scan from its start takes at most a step or two.
+pub struct Curve {
+    thresholds: Vec<f32>,
+    start: Vec<u16>,
+    shift: u32,
+    low: u32,
+}
+
+/// Linear values up to this take the straight segment, 12.92·x.
+const LINEAR_END: f64 = 0.0031308;
+
+impl Curve {
+    fn new(max: u32, shift: u32, low_exponent: i32) -> Curve {
+        let mut thresholds: Vec<f32> = (1..=max).map(|k| threshold(k, max)).collect();
+        thresholds.push(f32::INFINITY);
+        let low = ((127 + low_exponent) as u32) << 23 >> shift;
+        let top = 1f32.to_bits() >> shift;
+        let start = (low..=top)
+            .map(|b| {
+                let lo = if b == low {
+                    0.0
+                } else {
+                    f32::from_bits(b << shift)
+                };
+                thresholds.partition_point(|&t| t <= lo) as u16
+            })
+            .collect();
+        Curve {
+            thresholds,
+            start,
+            shift,
+            low,
+        }
+    }
+
+    /// The curve for 8-bit (`max` 255) or 16-bit (65535) values, built once.
+    pub fn of(max: u32) -> &'static Curve {
+        static EIGHT: OnceLock<Curve> = OnceLock::new();
+        static SIXTEEN: OnceLock<Curve> = OnceLock::new();
+        match max {
+            255 => EIGHT.get_or_init(|| Curve::new(255, 16, -14)),
+            _ => SIXTEEN.get_or_init(|| Curve::new(65535, 13, -22)),
+        }
+    }
+
+    /// The level of linear value `c`: NaN and negatives are 0, values above 1 the maximum.
+    #[inline(always)]
+    #[allow(clippy::manual_clamp)] // clamp keeps NaN; max(NaN, 0) is 0, which this needs
+    pub fn level(&self, c: f32) -> u32 {
+        let x = c.max(0.0).min(1.0);
+        let bucket = ((x.to_bits() >> self.shift).saturating_sub(self.low) as usize)
+            .min(self.start.len() - 1);
+        let mut level = self.start[bucket] as usize;
+        while x >= self.thresholds[level] {
+            level += 1;
+        }
+        level as u32
+    }
+
+    #[cfg(test)]
+    pub(crate) fn thresholds(&self) -> &[f32] {
+        &self.thresholds[..self.thresholds.len() - 1]
+    }
+}
+
+/// Where the exact curve reaches y = (k − ½)/max, in f64: the straight segment's inverse
+/// y/12.92, or ((y + 0.055)/1.055)^2.4 on the power segment (libm's pow).
+pub(crate) fn inverse(k: u32, max: u32) -> f64 {
+    let y = f64::from(2 * k - 1) / f64::from(2 * max);
+    if y <= 12.92 * LINEAR_END {
+        y / 12.92
+    } else {
+        libm::pow((y + 0.055) / 1.055, 2.4)
+    }
+}
+
+/// The smallest f32 at or above `inverse(k, max)`. The f64 inverse is within about 1e-15 of
+/// the exact real one, and the tests check that no threshold's real value lies that close to
+/// an f32, so this is the exact threshold.
+fn threshold(k: u32, max: u32) -> f32 {
+    let g = inverse(k, max);
+    let f = g as f32;
+    if f64::from(f) < g {
+        f32::from_bits(f.to_bits() + 1)
+    } else {
+        f
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The curve in f64, for comparisons away from thresholds.
+    fn srgb(x: f64) -> f64 {
+        if x <= LINEAR_END {
+            12.92 * x
+        } else {
+            1.055 * libm::pow(x, 1.0 / 2.4) - 0.055
+        }
+    }
+
+    /// Every threshold's f64 value is at least 1e-13 (relative) away from an f32, far beyond
+    /// the f64 evaluation's error: rounding it up to an f32 gives the exact threshold. And no
+    /// level's halfway point falls in the curve's tiny jump at 0.0031308.
+    #[test]
+    fn thresholds_are_exact() {
+        for max in [255u32, 65535] {
+            for k in 1..=max {
+                let g = inverse(k, max);
+                let f = g as f32;
+                let (below, above) = if f64::from(f) < g {
+                    (f, f32::from_bits(f.to_bits() + 1))
+                } else {
+                    (f32::from_bits(f.to_bits() - 1), f)
+                };
+                let margin = (g - f64::from(below)).min(f64::from(above) - g);
+                assert!(margin > 1e-13 * g, "level {k} of {max}: {g:e}");
+                let y = f64::from(2 * k - 1) / f64::from(2 * max);
+                let jump = 1.055 * libm::pow(LINEAR_END, 1.0 / 2.4) - 0.055;
+                assert!(!(y > 12.92 * LINEAR_END && y <= jump), "level {k} of {max}");
+            }
+        }
+    }
+
+    /// The lookup against the definition (the count of thresholds at or below the value), for
+    /// every threshold ± 2 ulps and random values, and against round(max·sRGB(x)) in f64 where
+    /// that is not within 1e-9 of a half.
+    #[test]
+    #[allow(clippy::manual_clamp)] // NaN must count as 0, as `level` takes it
+    fn lookup_counts_thresholds() {
+        for max in [255u32, 65535] {
+            let curve = Curve::of(max);
+            let t = curve.thresholds();
+            let mut values = vec![0.0f32, 1.0, -1.0, 2.0, f32::NAN, f32::MIN_POSITIVE, 1e-45];
+            for &x in t {
+                values.extend((-2..=2).map(|d| f32::from_bits(x.to_bits().wrapping_add_signed(d))));
+            }
+            let mut state = 0x2545_f491u32;
+            values.extend((0..200_000).map(|_| {
+                state ^= state << 13;
+                state ^= state >> 17;
+                state ^= state << 5;
+                (state >> 8) as f32 / (1 << 24) as f32
+            }));
+            for x in values {
+                let want = t.partition_point(|&th| th <= x.max(0.0).min(1.0));
+                assert_eq!(curve.level(x) as usize, want, "{x:e}");
+                if (0.0..=1.0).contains(&x) {
+                    let y = srgb(f64::from(x)) * f64::from(max);
+                    if ((y - y.floor()) - 0.5).abs() > 1e-9 {
+                        assert_eq!(want as f64, (y + 0.5).floor(), "{x:e} of {max}");
+                    }
+                }
+            }
+        }
+    }
+}
