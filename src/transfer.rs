@@ -31,7 +31,13 @@ impl Encoding {
 /// 1, so the scan from its start takes at most a step or two.
 pub struct Curve {
     thresholds: Vec<f32>,
-    start: Vec<u16>,
+    /// u32, not u16: AVX2 gathers 32-bit lanes.
+    start: Vec<u32>,
+    /// `thresholds[start[b]]`: with `single`, the level of x is start[b] + (x ≥ next[b]).
+    next: Vec<f32>,
+    /// Whether every bucket holds at most one threshold (8 bits: yes), so one comparison
+    /// finds the level and the loop has no branch left to stop vectorising.
+    single: bool,
     shift: u32,
     low: u32,
 }
@@ -45,19 +51,31 @@ impl Curve {
         thresholds.push(f32::INFINITY);
         let low = ((127 + low_exponent) as u32) << 23 >> shift;
         let top = 1f32.to_bits() >> shift;
-        let start = (low..=top)
+        let start: Vec<u32> = (low..=top)
             .map(|b| {
                 let lo = if b == low {
                     0.0
                 } else {
                     f32::from_bits(b << shift)
                 };
-                thresholds.partition_point(|&t| t <= lo) as u16
+                thresholds.partition_point(|&t| t <= lo) as u32
             })
             .collect();
+        let next = start.iter().map(|&s| thresholds[s as usize]).collect();
+        // The largest value of bucket b is just below the next bucket's first; 1 ends the last.
+        let single = (low..=top).zip(&start).all(|(b, &s)| {
+            let hi = if b == top {
+                1.0
+            } else {
+                f32::from_bits(((b + 1) << shift) - 1)
+            };
+            thresholds.get(s as usize + 1).is_none_or(|&t| t > hi)
+        });
         Curve {
             thresholds,
             start,
+            next,
+            single,
             shift,
             low,
         }
@@ -75,16 +93,37 @@ impl Curve {
 
     /// The level of linear value `c`: NaN and negatives are 0, values above 1 the maximum.
     #[inline(always)]
-    #[allow(clippy::manual_clamp)] // clamp keeps NaN; max(NaN, 0) is 0, which this needs
     pub fn level(&self, c: f32) -> u32 {
-        let x = c.max(0.0).min(1.0);
-        let bucket = ((x.to_bits() >> self.shift).saturating_sub(self.low) as usize)
-            .min(self.start.len() - 1);
+        if self.single {
+            return self.level_single(c);
+        }
+        let (x, bucket) = self.bucket(c);
         let mut level = self.start[bucket] as usize;
         while x >= self.thresholds[level] {
             level += 1;
         }
         level as u32
+    }
+
+    /// `level` when every bucket holds at most one threshold: branch-free.
+    #[inline(always)]
+    pub fn level_single(&self, c: f32) -> u32 {
+        let (x, bucket) = self.bucket(c);
+        self.start[bucket] + u32::from(x >= self.next[bucket])
+    }
+
+    /// The clamped value and its bucket.
+    #[inline(always)]
+    #[allow(clippy::manual_clamp)] // clamp keeps NaN; max(NaN, 0) is 0, which this needs
+    fn bucket(&self, c: f32) -> (f32, usize) {
+        let x = c.max(0.0).min(1.0);
+        let b = (x.to_bits() >> self.shift).saturating_sub(self.low) as usize;
+        (x, b.min(self.start.len() - 1))
+    }
+
+    /// Whether one comparison decides every level (see `single`).
+    pub fn single(&self) -> bool {
+        self.single
     }
 
     #[cfg(test)]
@@ -159,6 +198,7 @@ mod tests {
     #[test]
     #[allow(clippy::manual_clamp)] // NaN must count as 0, as `level` takes it
     fn lookup_counts_thresholds() {
+        assert!(Curve::of(255).single());
         for max in [255u32, 65535] {
             let curve = Curve::of(max);
             let t = curve.thresholds();
