@@ -188,7 +188,7 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
     };
     let s = &seq.settings;
     format!(
-        "{file}: ok\n  objects:    {} ({spheres} spheres, {planes} planes)\n  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  frames:     {} at {} fps ({:.2} s), {camera}\n{}  output:     {}\n",
+        "{file}: ok\n  objects:    {} ({spheres} spheres, {planes} planes)\n  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {} at {} fps ({:.2} s), {camera}\n{}  output:     {}\n",
         scene.objects.len(),
         scene.materials.len(),
         scene.lights.len(),
@@ -200,11 +200,33 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
         s.width,
         s.height,
         s.max_depth,
+        picture(s),
         t.frame_count,
         t.fps,
         t.frame_count as f64 / t.fps,
         timing(t),
         printable(&seq.output)
+    )
+}
+
+/// The `picture:` line: sampling, encoding, exposure and alpha, what decides how frames look.
+fn picture(s: &crate::tracer::Settings) -> String {
+    let sampling = match s.adaptive {
+        Some(a) => format!(
+            "{} to {} samples (adaptive, threshold {})",
+            s.samples, a.max_samples, a.threshold
+        ),
+        None => format!(
+            "{} sample{}",
+            s.samples,
+            if s.samples == 1 { "" } else { "s" }
+        ),
+    };
+    let alpha = if s.alpha { ", alpha" } else { "" };
+    format!(
+        "{sampling}, {}, exposure {}{alpha}",
+        s.encoding.name(),
+        s.exposure
     )
 }
 
