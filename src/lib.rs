@@ -5,6 +5,7 @@ pub mod bench;
 pub mod camera;
 pub mod claim;
 pub mod cli;
+pub mod exposure;
 pub mod frame;
 pub mod measure;
 pub mod output;

@@ -13,9 +13,10 @@ mod timeline;
 pub use guard::nesting_depth;
 
 use crate::camera::{Camera, Degenerate, Pose};
+use crate::exposure::Shutter;
 use crate::output::pattern::Pattern;
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
-use crate::timeline::Timeline;
+use crate::timeline::{Ease, Key, Timeline};
 use crate::tracer::{Adaptive, Sampler, Settings};
 use glam::DVec3;
 pub use raw::Quality;
@@ -416,11 +417,11 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<(Sequence, Option<Invalid>)
     for (i, l) in raw.lights.iter().enumerate() {
         lights.push(light(&format!("lights[{i}]"), l)?);
     }
-    let camera = raw.camera.as_ref().map(camera_pose).transpose()?;
+    let camera = raw.camera.as_ref().map(camera_key).transpose()?;
     let loaded = match (&raw.timeline, camera) {
-        (Some(t), camera) => timeline::timeline(t, camera)?,
-        (None, Some(pose)) => timeline::Loaded {
-            timeline: Timeline::still(pose),
+        (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
+        (None, Some(key)) => timeline::Loaded {
+            timeline: Timeline::still(key),
             warnings: Vec::new(),
             problem: None,
         },
@@ -464,6 +465,7 @@ fn render_settings(r: &raw::Render) -> Check<Settings> {
             Some(raw::Sampler::Random) => Sampler::Random,
             _ => Sampler::Stratified,
         },
+        shutter: shutter(r)?,
     };
     pixels(s.width, s.height).or_else(|m| invalid("render.width", m))?;
     if let Some(q) = r.quality {
@@ -512,6 +514,25 @@ fn render_settings(r: &raw::Render) -> Check<Settings> {
         );
     }
     Ok(s)
+}
+
+/// `render.shutter` and `render.shutter_offset`; None when the shutter angle is 0.
+fn shutter(r: &raw::Render) -> Check<Option<Shutter>> {
+    let angle = in_range(
+        "render.shutter",
+        r.shutter.unwrap_or(0.0),
+        0.0,
+        360.0,
+        "an angle in [0, 360] degrees (0: no motion blur, 180: film)",
+    )?;
+    let offset = in_range(
+        "render.shutter_offset",
+        r.shutter_offset.unwrap_or(0.0),
+        -0.5,
+        0.5,
+        "in [-0.5, 0.5] (0: open interval centred on the frame time, 0.5: opening at it, -0.5: closing at it)",
+    )?;
+    Ok((angle > 0.0).then_some(Shutter { angle, offset }))
 }
 
 /// Default `render.adaptive.threshold`: a linear colour difference of about 8/255.
@@ -846,7 +867,8 @@ fn spot(path: &str, s: &raw::SpotLight) -> Check<Light> {
     })
 }
 
-fn camera_pose(c: &raw::Camera) -> Check<Pose> {
+/// `camera:` as a key at time 0: a still camera, or what the first keyframe starts from.
+fn camera_key(c: &raw::Camera) -> Check<Key> {
     let pose = Pose {
         position: vector("camera.position", c.position)?,
         look_at: vector("camera.look_at", c.look_at)?,
@@ -854,7 +876,35 @@ fn camera_pose(c: &raw::Camera) -> Check<Pose> {
         fov: fov("camera.fov", c.fov.unwrap_or(90.0))?,
     };
     check_pose("camera", &pose)?;
-    Ok(pose)
+    Ok(Key {
+        time: 0.0,
+        pose,
+        ease: Ease::Pass,
+        aperture: aperture("camera.aperture", c.aperture.unwrap_or(0.0))?,
+        focus_distance: c
+            .focus_distance
+            .map(|f| focus_distance("camera.focus_distance", f))
+            .transpose()?,
+    })
+}
+
+/// A lens diameter: 0 (a pinhole) or more.
+fn aperture(path: &str, v: f64) -> Check<f64> {
+    if number(path, v)? < 0.0 {
+        return invalid(
+            path,
+            format!(
+                "must be 0 (a pinhole) or a positive lens diameter {}",
+                got_num(v)
+            ),
+        );
+    }
+    Ok(v)
+}
+
+/// A distance in focus, along the view axis.
+fn focus_distance(path: &str, v: f64) -> Check<f64> {
+    positive(path, v)
 }
 
 /// `path` is the mapping holding the pose; the error names the field to change.

@@ -13,7 +13,7 @@ pub mod sample;
 pub mod shade;
 pub mod vec3;
 
-use crate::camera::Camera;
+use crate::exposure::{Exposure, Shutter};
 use crate::frame::Frame;
 use crate::scene::Scene;
 pub use kernel::Kernel;
@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use rows::{Pass, RowOut, RowStats};
 
 /// What decides a frame besides the scene and the camera.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Clone, Copy, PartialEq)]
 pub struct Settings {
     pub width: u32,
     pub height: u32,
@@ -33,6 +33,27 @@ pub struct Settings {
     pub samples: u32,
     pub adaptive: Option<Adaptive>,
     pub sampler: Sampler,
+    /// Motion blur: None when `render.shutter` is 0.
+    pub shutter: Option<Shutter>,
+}
+
+/// The derived form, with `shutter` only when there is one: the text is part of every frame's
+/// fingerprint, so files without a shutter keep the fingerprints they had before it existed.
+impl std::fmt::Debug for Settings {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        let mut s = f.debug_struct("Settings");
+        s.field("width", &self.width)
+            .field("height", &self.height)
+            .field("max_depth", &self.max_depth)
+            .field("depth", &self.depth)
+            .field("samples", &self.samples)
+            .field("adaptive", &self.adaptive)
+            .field("sampler", &self.sampler);
+        if let Some(shutter) = &self.shutter {
+            s.field("shutter", shutter);
+        }
+        s.finish()
+    }
 }
 
 /// Adaptive sampling: every pixel gets `samples`; pixels whose samples disagree, or whose
@@ -65,15 +86,16 @@ impl World {
     }
 }
 
-pub fn render(world: &World, camera: &Camera, settings: &Settings, frame: u64) -> Frame {
-    render_with(Kernel::chosen(), world, camera, settings, frame)
+/// Frame number `frame` of `world` seen with `exposure`'s cameras.
+pub fn render(world: &World, exposure: &Exposure, settings: &Settings, frame: u64) -> Frame {
+    render_with(Kernel::chosen(), world, exposure, settings, frame)
 }
 
 /// `render` with a given kernel (they all give the same frame; benchmarks compare them).
 pub fn render_with(
     kernel: Kernel,
     world: &World,
-    camera: &Camera,
+    exposure: &Exposure,
     settings: &Settings,
     frame: u64,
 ) -> Frame {
@@ -87,10 +109,12 @@ pub fn render_with(
             0
         }
     ];
+    let camera = &exposure.camera;
     let from_origin = world.geometry.from_origin(camera.origin);
     let first = Pass {
         world,
         camera,
+        exposure: exposure.sampled().then_some(exposure),
         settings,
         frame,
         samples: Samples::All(settings.samples),
