@@ -1,13 +1,19 @@
 //! Claim files: plain processes sharing one output directory split the frames without a
 //! scheduler. Before rendering a frame a process creates `.NAME.rayreel-claim` next to it
-//! with O_EXCL, naming its host, pid and start time; it refreshes the file's mtime while the
-//! frame is in flight and removes it once the frame is written. A claim whose owner is gone
-//! (same host, dead pid) or silent for longer than the timeout is taken over, so a crashed
-//! machine leaves no holes.
+//! with O_EXCL, naming its host, pid, the process's start time and the machine's boot id; it
+//! refreshes the file's mtime (the heartbeat) while the frame is in flight and removes it once
+//! the frame is written.
+//!
+//! A claim is stale, and taken over, when its heartbeat is older than the timeout, or when it
+//! comes from this host and its process is gone: the pid is dead, or names another process
+//! than the one that wrote the claim (its start time or the boot id differ: pid reuse, a
+//! container restarted with the same host name). So a crashed process or machine leaves no
+//! hole and nothing waits forever.
 
-use crate::output::atomic::{alive, hostname};
+use crate::output::atomic::{alive, hostname, sidecar};
 use std::fs::{self, OpenOptions};
 use std::io::Write;
+use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, SystemTime};
 
@@ -24,28 +30,77 @@ pub enum Attempt {
     Held(String),
 }
 
+/// Who wrote a claim, as its owner line records it.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+struct Owner {
+    host: String,
+    pid: Option<i32>,
+    start: Option<u64>,
+    boot: Option<String>,
+}
+
+impl Owner {
+    fn parse(line: &str) -> Owner {
+        let field = |key: &str| {
+            line.split_whitespace()
+                .find_map(|kv| kv.strip_prefix(key)?.strip_prefix('='))
+                .map(str::to_string)
+        };
+        Owner {
+            host: field("host").unwrap_or_default(),
+            pid: field("pid").and_then(|p| p.parse().ok()),
+            start: field("start").and_then(|s| s.parse().ok()),
+            boot: field("boot"),
+        }
+    }
+
+    /// Whether the process that wrote the claim is gone, judged on this host.
+    fn gone_from_here(&self) -> bool {
+        let Some(pid) = self.pid else {
+            return false;
+        };
+        !alive(pid) || differs(&self.boot, boot_id()) || differs(&self.start, start_time(pid))
+    }
+}
+
+/// Both known, and not the same.
+fn differs<T: PartialEq>(recorded: &Option<T>, now: Option<T>) -> bool {
+    recorded.is_some() && now.is_some() && *recorded != now
+}
+
+/// When process `pid` started, in clock ticks since boot (field 22 of /proc/PID/stat).
+pub fn start_time(pid: i32) -> Option<u64> {
+    let stat = fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // The command name (field 2) is in parentheses and may hold spaces and parentheses.
+    let after_name = &stat[stat.rfind(')')? + 1..];
+    after_name.split_whitespace().nth(19)?.parse().ok()
+}
+
+/// This boot of the kernel (containers share their host's).
+pub fn boot_id() -> Option<String> {
+    let id = fs::read_to_string("/proc/sys/kernel/random/boot_id").ok()?;
+    Some(id.trim().to_string()).filter(|id| !id.is_empty())
+}
+
 impl Claims {
     pub fn new(timeout: Duration) -> Claims {
-        let start = SystemTime::now()
-            .duration_since(SystemTime::UNIX_EPOCH)
-            .unwrap_or_default();
+        let pid = std::process::id();
+        let field = |name: &str, v: Option<String>| v.map(|v| format!(" {name}={v}"));
         Claims {
             timeout,
             owner: format!(
-                "host={} pid={} start={}",
+                "host={} pid={pid}{}{}",
                 hostname(),
-                std::process::id(),
-                start.as_secs()
+                field("start", start_time(pid as i32).map(|s| s.to_string())).unwrap_or_default(),
+                field("boot", boot_id()).unwrap_or_default()
             ),
         }
     }
 
+    /// `.NAME.rayreel-claim` beside the frame (a hash for NAME when the name is too long).
     pub fn path(frame: &Path) -> PathBuf {
-        let name = frame
-            .file_name()
-            .map(|n| n.to_string_lossy())
-            .unwrap_or_default();
-        frame.with_file_name(format!(".{name}.rayreel-claim"))
+        const SUFFIX: &str = ".rayreel-claim";
+        sidecar(frame, SUFFIX, 1 + SUFFIX.len())
     }
 
     /// Claims the frame file `frame`, taking over a stale claim.
@@ -78,27 +133,20 @@ impl Claims {
     }
 
     fn is_stale(&self, path: &Path, holder: &str) -> bool {
-        let field = |key: &str| {
-            holder
-                .split_whitespace()
-                .find_map(|kv| kv.strip_prefix(key)?.strip_prefix('='))
-                .map(str::to_string)
-        };
-        if field("host").as_deref() == Some(hostname())
-            && let Some(pid) = field("pid").and_then(|p| p.parse::<i32>().ok())
-        {
-            return !alive(pid);
-        }
-        let age = fs::metadata(path)
-            .and_then(|m| m.modified())
-            .map(|t| SystemTime::now().duration_since(t).unwrap_or_default());
-        age.map_or(true, |a| a > self.timeout)
+        let silent = heartbeat_age(path).is_none_or(|age| age > self.timeout);
+        let owner = Owner::parse(holder);
+        silent || (owner.host == hostname() && owner.gone_from_here())
     }
 
     /// Shows the owner is alive: refreshes the claim's modification time.
     pub fn heartbeat(&self, frame: &Path) {
         let path = Claims::path(frame);
-        if let Ok(f) = OpenOptions::new().append(true).open(&path) {
+        // Never through a link someone put in the claim's place.
+        let opened = OpenOptions::new()
+            .append(true)
+            .custom_flags(libc::O_NOFOLLOW)
+            .open(&path);
+        if let Ok(f) = opened {
             let _ = f.set_modified(SystemTime::now());
         }
     }
@@ -113,5 +161,64 @@ impl Claims {
     /// How often in-flight claims are refreshed.
     pub fn heartbeat_every(&self) -> Duration {
         self.timeout / 4
+    }
+}
+
+/// How long ago the claim at `path` was last refreshed.
+fn heartbeat_age(path: &Path) -> Option<Duration> {
+    let modified = fs::metadata(path).and_then(|m| m.modified()).ok()?;
+    Some(
+        SystemTime::now()
+            .duration_since(modified)
+            .unwrap_or_default(),
+    )
+}
+
+/// A claim another process holds, as a waiting process reports it.
+#[derive(Debug, Clone)]
+pub struct Held {
+    pub path: PathBuf,
+    /// Its owner line: host, pid, start time, boot id.
+    pub owner: String,
+    /// How long ago it was refreshed; `None` once it is gone.
+    pub heartbeat: Option<Duration>,
+}
+
+/// The claim on `frame` as it is now.
+pub fn held(frame: &Path) -> Held {
+    let path = Claims::path(frame);
+    Held {
+        owner: fs::read_to_string(&path)
+            .unwrap_or_default()
+            .trim()
+            .to_string(),
+        heartbeat: heartbeat_age(&path),
+        path,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn owners_are_identified_by_start_time_and_boot() {
+        let me = std::process::id() as i32;
+        let line = Claims::new(Duration::from_secs(9)).owner;
+        let owner = Owner::parse(&line);
+        assert_eq!((owner.host.as_str(), owner.pid), (hostname(), Some(me)));
+        assert!(owner.start.is_some() && owner.boot.is_some(), "{line}");
+        assert!(!owner.gone_from_here());
+        let reused = Owner {
+            start: owner.start.map(|s| s + 1),
+            ..owner.clone()
+        };
+        let rebooted = Owner {
+            boot: Some("another boot".into()),
+            ..owner.clone()
+        };
+        assert!(reused.gone_from_here() && rebooted.gone_from_here());
+        // Without a start time or boot id to compare, a live pid holds.
+        assert!(!Owner::parse(&format!("host=h pid={me}")).gone_from_here());
     }
 }

@@ -1,5 +1,6 @@
 //! Command-line definitions (clap) and frame specs (`7`, `0-23`, `0-100:5`, `1-100x2`, `1,3,7-9`).
 
+use crate::frameset::{FrameSet, Run};
 use crate::output::exr::Precision;
 use crate::output::png::Compression;
 use crate::output::stream::StreamFormat;
@@ -178,8 +179,8 @@ pub struct JobArgs {
 pub struct RenderArgs {
     #[command(flatten)]
     pub job: JobArgs,
-    /// Worker threads (default: all cores).
-    #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    /// Worker threads (default: all cores; at most 1024).
+    #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..=MAX_THREADS as i64))]
     pub threads: Option<u16>,
     /// No progress bar and no per-frame lines.
     #[arg(long, short)]
@@ -209,6 +210,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "SECONDS", default_value_t = 120, value_parser = clap::value_parser!(u64).range(2..))]
     pub claim_timeout: u64,
 }
+
+/// Most worker threads `--threads` may ask for: more than machines have cores, few enough to
+/// start in moments.
+pub const MAX_THREADS: u16 = 1024;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum ProgressFormat {
@@ -301,10 +306,9 @@ pub struct FrameSpec {
 }
 
 impl FrameSpec {
-    /// The selected frames in ascending order without repeats, or the first one out of range.
-    /// A bitset over the timeline collects them, so overlapping ranges cost nothing extra:
-    /// memory is bounded by the frame count however the spec repeats itself.
-    pub fn frames(&self, frame_count: u64) -> Result<Vec<u64>, String> {
+    /// The selected frames, or the first one out of range. Repeated and overlapping ranges
+    /// are joined as ranges, so `0-9999999` costs one run, however often it is repeated.
+    pub fn frames(&self, frame_count: u64) -> Result<FrameSet, String> {
         for &(_, end, _) in &self.ranges {
             if end >= frame_count {
                 return Err(format!(
@@ -313,15 +317,8 @@ impl FrameSpec {
                 ));
             }
         }
-        let mut seen = vec![0u64; frame_count.div_ceil(64) as usize];
-        for &(start, end, step) in &self.ranges {
-            for n in (start..=end).step_by(step as usize) {
-                seen[(n / 64) as usize] |= 1 << (n % 64);
-            }
-        }
-        Ok((0..frame_count)
-            .filter(|n| seen[(n / 64) as usize] >> (n % 64) & 1 == 1)
-            .collect())
+        let runs = self.ranges.iter().map(|&(a, b, step)| Run::new(a, b, step));
+        Ok(FrameSet::from_runs(runs.collect()))
     }
 }
 
@@ -380,7 +377,7 @@ mod tests {
     use super::*;
 
     fn frames(s: &str, count: u64) -> Result<Vec<u64>, String> {
-        parse_frame_spec(s)?.frames(count)
+        Ok(parse_frame_spec(s)?.frames(count)?.iter().collect())
     }
 
     #[test]
@@ -409,9 +406,10 @@ mod tests {
         );
         // A huge range is refused before anything is expanded.
         assert!(frames("0-18446744073709551615", 48).is_err());
-        // Repeated ranges are collected once (this once took 80 MB a copy).
+        // Repeated ranges are joined as ranges (this once took 80 MB a copy).
         let spec = vec!["4-8888885"; 16].join(",");
-        assert_eq!(frames(&spec, 10_000_000).unwrap().len(), 8_888_882);
+        let set = parse_frame_spec(&spec).unwrap().frames(10_000_000).unwrap();
+        assert_eq!((set.len(), set.runs().len()), (8_888_882, 1));
         assert!(
             frames(&vec!["1"; 65].join(","), 10)
                 .unwrap_err()

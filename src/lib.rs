@@ -5,8 +5,10 @@ pub mod bench;
 pub mod camera;
 pub mod claim;
 pub mod cli;
+pub mod console;
 pub mod exposure;
 pub mod frame;
+pub mod frameset;
 pub mod measure;
 pub mod output;
 pub mod plan;
@@ -37,9 +39,9 @@ pub enum Error {
     /// `status` found frames that are not up to date (exit 1).
     #[error("{0}")]
     Incomplete(String),
-    /// Ctrl-C or SIGTERM (exit 130).
+    /// Ctrl-C or SIGTERM: the exit code is 128 + the signal (130 for SIGINT, 143 for SIGTERM).
     #[error("{0}")]
-    Interrupted(String),
+    Interrupted(String, u8),
 }
 
 impl Error {
@@ -47,7 +49,7 @@ impl Error {
         match self {
             Error::Load(_) | Error::Usage(_) => 2,
             Error::Failed(_) | Error::Incomplete(_) => 1,
-            Error::Interrupted(_) => 130,
+            Error::Interrupted(_, code) => *code,
         }
     }
 }

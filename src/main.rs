@@ -6,7 +6,7 @@ fn main() -> ExitCode {
     match rayreel::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("rayreel: {e}");
+            eprintln!("rayreel: {}", rayreel::console::printable(&e.to_string()));
             ExitCode::from(e.exit_code())
         }
     }

@@ -1,11 +1,17 @@
 //! Which frames a run must render: each selected frame's file is inspected and compared with
 //! the fingerprint it would get now. Up-to-date frames are skipped; missing, stale and corrupt
 //! ones are rendered; foreign files (images rayreel did not write) are left alone unforced.
+//!
+//! The directory is listed once: a selected frame whose name is not in it is missing without a
+//! look of its own, so a plan costs the selection's runs plus the files that exist, and each
+//! state is kept as a `FrameSet`.
 
-use crate::output::{self, Existing, fingerprint};
+use crate::frameset::FrameSet;
+use crate::output::{self, Existing, Expected, fingerprint};
 use crate::schedule::{Files, frame_meta};
 use crate::sequence::Sequence;
 use rayon::prelude::*;
+use std::path::{Path, PathBuf};
 
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum State {
@@ -16,59 +22,160 @@ pub enum State {
     Foreign,
 }
 
-#[derive(Debug, Clone)]
+/// Every selected frame, by the state of its file.
+#[derive(Debug, Clone, Default)]
 pub struct Plan {
-    /// Every selected frame with the state of its file, ascending.
-    pub frames: Vec<(u64, State)>,
+    pub up_to_date: FrameSet,
+    pub stale: FrameSet,
+    pub missing: FrameSet,
+    pub corrupt: FrameSet,
+    pub foreign: FrameSet,
+    /// What is wrong with each corrupt file.
+    pub why: Vec<(u64, String)>,
     pub force: bool,
 }
 
-pub fn plan(seq: &Sequence, frames: &[u64], files: &Files, force: bool) -> Plan {
+/// Frames inspected in parallel at a time: bounds memory whatever the selection.
+const CHUNK: usize = 4096;
+
+pub fn plan(seq: &Sequence, frames: &FrameSet, files: &Files, force: bool) -> Plan {
+    let mut plan = Plan {
+        force,
+        ..Plan::default()
+    };
+    let (present, missing) = match listed(files, frames) {
+        Some(present) => {
+            let missing = frames.without(&present);
+            (present, missing)
+        }
+        // Unlisted (unreadable directory): look at every selected frame's file.
+        None => (frames.iter().collect(), FrameSet::new()),
+    };
     let run = fingerprint::of_run(&seq.scene, &seq.settings, &files.format);
-    let frames = frames
-        .par_iter()
-        .map(|&n| {
-            let state = match output::inspect(&files.pattern.frame_path(n), &files.format) {
-                Existing::Missing => State::Missing,
-                Existing::Foreign => State::Foreign,
-                Existing::Corrupt(why) => State::Corrupt(why),
-                Existing::Ours(f) if f == frame_meta(seq, n, &run).fingerprint => State::UpToDate,
-                Existing::Ours(_) => State::Stale,
-            };
-            (n, state)
-        })
-        .collect();
-    Plan { frames, force }
+    let expected = Expected {
+        width: seq.settings.width,
+        height: seq.settings.height,
+        format: files.format,
+    };
+    let mut previous = None;
+    for chunk in present.chunks(CHUNK) {
+        let states: Vec<State> = chunk
+            .par_iter()
+            .map(|&n| {
+                let ours = |f: &str| f == frame_meta(seq, n, &run).fingerprint;
+                match output::inspect(&files.pattern.frame_path(n), &expected) {
+                    Existing::Missing => State::Missing,
+                    Existing::Foreign => State::Foreign,
+                    Existing::Corrupt(why) => State::Corrupt(why),
+                    Existing::Ours(f) if ours(&f) => State::UpToDate,
+                    Existing::Damaged { fingerprint, why } if ours(&fingerprint) => {
+                        State::Corrupt(why)
+                    }
+                    Existing::Ours(_) | Existing::Damaged { .. } => State::Stale,
+                }
+            })
+            .collect();
+        for (&n, state) in chunk.iter().zip(states) {
+            // Runs of a state join only frames that follow each other in the selection, so
+            // no state's run strides over another's frames and sets stay runs when joined.
+            let after = previous.filter(|&p| frames.next_after(p) == Some(n));
+            plan.add(n, state, after);
+            previous = Some(n);
+        }
+    }
+    // Frames that vanished between the listing and their inspection join the missing ones.
+    plan.missing = FrameSet::union(&[&plan.missing, &missing]);
+    plan
+}
+
+/// The selected frames whose names the directory holds, ascending; `None` when it cannot be
+/// listed for another reason than not existing.
+fn listed(files: &Files, frames: &FrameSet) -> Option<Vec<u64>> {
+    let dir = directory(&files.pattern.frame_path(0));
+    let entries = match std::fs::read_dir(&dir) {
+        Ok(entries) => entries,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Some(Vec::new()),
+        Err(_) => return None,
+    };
+    let mut present = Vec::new();
+    for entry in entries {
+        let entry = entry.ok()?;
+        if let Some(n) = entry
+            .file_name()
+            .to_str()
+            .and_then(|name| files.pattern.frame_number(name))
+            .filter(|&n| frames.contains(n))
+        {
+            present.push(n);
+        }
+    }
+    present.sort_unstable();
+    Some(present)
+}
+
+/// The directory a frame file lives in (`.` for a bare name).
+pub fn directory(frame: &Path) -> PathBuf {
+    match frame.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
 }
 
 impl Plan {
-    /// Whether frame `n` in state `s` gets rendered and written.
-    pub fn renders(&self, s: &State) -> bool {
-        self.force || matches!(s, State::Stale | State::Missing | State::Corrupt(_))
+    /// Records frame `n`, which follows every frame recorded so far, and in the selection
+    /// directly follows `after` if given.
+    fn add(&mut self, n: u64, state: State, after: Option<u64>) {
+        let set = match state {
+            State::UpToDate => &mut self.up_to_date,
+            State::Stale => &mut self.stale,
+            State::Missing => &mut self.missing,
+            State::Corrupt(why) => {
+                self.why.push((n, why));
+                &mut self.corrupt
+            }
+            State::Foreign => &mut self.foreign,
+        };
+        match after.is_some() && set.last() == after {
+            true => set.push(n),
+            false => set.push_apart(n),
+        }
     }
 
-    pub fn to_render(&self) -> Vec<u64> {
-        self.frames
-            .iter()
-            .filter(|(_, s)| self.renders(s))
-            .map(|(n, _)| *n)
-            .collect()
+    /// Every selected frame.
+    pub fn selected(&self) -> FrameSet {
+        FrameSet::union(&self.by_state().map(|(_, s)| s))
+    }
+
+    /// Frames that get rendered and written.
+    pub fn to_render(&self) -> FrameSet {
+        if self.force {
+            return self.selected();
+        }
+        FrameSet::union(&[&self.stale, &self.missing, &self.corrupt])
     }
 
     /// Frames whose files are foreign and stay untouched.
-    pub fn blocked(&self) -> Vec<u64> {
-        if self.force {
-            return Vec::new();
+    pub fn blocked(&self) -> FrameSet {
+        match self.force {
+            true => FrameSet::new(),
+            false => self.foreign.clone(),
         }
-        self.frames
-            .iter()
-            .filter(|(_, s)| *s == State::Foreign)
-            .map(|(n, _)| *n)
-            .collect()
     }
 
-    fn count(&self, f: impl Fn(&State) -> bool) -> usize {
-        self.frames.iter().filter(|(_, s)| f(s)).count()
+    /// Every state with its frames, in the order reports list them.
+    pub fn by_state(&self) -> [(&'static str, &FrameSet); 5] {
+        [
+            ("up to date", &self.up_to_date),
+            ("stale", &self.stale),
+            ("missing", &self.missing),
+            ("corrupt", &self.corrupt),
+            ("foreign", &self.foreign),
+        ]
+    }
+
+    /// How many frames are selected.
+    pub fn selected_count(&self) -> u64 {
+        self.by_state().iter().map(|(_, s)| s.len()).sum()
     }
 
     /// `48 frames: 30 up to date, 2 stale, 16 missing → rendering 18`.
@@ -83,82 +190,18 @@ impl Plan {
 
     /// `48 frames: 30 up to date, 2 stale, 16 missing`.
     pub fn status_line(&self) -> String {
-        let parts: Vec<String> = [
-            ("up to date", self.count(|s| *s == State::UpToDate)),
-            ("stale", self.count(|s| *s == State::Stale)),
-            ("missing", self.count(|s| *s == State::Missing)),
-            ("corrupt", self.count(|s| matches!(s, State::Corrupt(_)))),
-            ("foreign", self.count(|s| *s == State::Foreign)),
-        ]
-        .iter()
-        .filter(|(_, n)| *n > 0)
-        .map(|(what, n)| format!("{n} {what}"))
-        .collect();
-        let n = self.frames.len();
+        let parts: Vec<String> = self
+            .by_state()
+            .iter()
+            .filter(|(_, s)| !s.is_empty())
+            .map(|(what, s)| format!("{} {what}", s.len()))
+            .collect();
+        let n = self.selected_count();
         let parts = if parts.is_empty() {
             "none selected".to_string()
         } else {
             parts.join(", ")
         };
         format!("{n} frame{}: {parts}", if n == 1 { "" } else { "s" })
-    }
-}
-
-/// Task `k` of `n` (1-based) takes every n-th frame starting at its own: shares differ by at
-/// most one frame, and each task sweeps the whole timeline, so close-ups and wide shots (which
-/// cluster in time and cost differently) spread evenly over the tasks.
-pub fn shard(frames: &[u64], k: u64, n: u64) -> Vec<u64> {
-    frames
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| *i as u64 % n == k - 1)
-        .map(|(_, f)| *f)
-        .collect()
-}
-
-/// Frame numbers as a compact spec: `0-11,14,20-47`.
-pub fn compress(frames: &[u64]) -> String {
-    let mut out: Vec<String> = Vec::new();
-    let mut i = 0;
-    while i < frames.len() {
-        let mut j = i;
-        while j + 1 < frames.len() && frames[j + 1] == frames[j] + 1 {
-            j += 1;
-        }
-        out.push(if j == i {
-            frames[i].to_string()
-        } else {
-            format!("{}-{}", frames[i], frames[j])
-        });
-        i = j + 1;
-    }
-    out.join(",")
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn shards_are_disjoint_cover_everything_and_balance() {
-        for count in [0u64, 1, 2, 7, 48, 101, 1000] {
-            let frames: Vec<u64> = (0..count).map(|f| f * 3 + 1).collect();
-            for n in 1..=9 {
-                let shares: Vec<Vec<u64>> = (1..=n).map(|k| shard(&frames, k, n)).collect();
-                let mut all: Vec<u64> = shares.concat();
-                all.sort_unstable();
-                assert_eq!(all, frames, "{count} frames over {n}");
-                let sizes: Vec<usize> = shares.iter().map(Vec::len).collect();
-                let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
-                assert!(hi - lo <= 1, "{sizes:?}");
-            }
-        }
-    }
-
-    #[test]
-    fn compresses_runs() {
-        assert_eq!(compress(&[0, 1, 2, 3, 5, 7, 8]), "0-3,5,7-8");
-        assert_eq!(compress(&[]), "");
-        assert_eq!(compress(&[4]), "4");
     }
 }

@@ -2,6 +2,8 @@
 //! otherwise (so farm wrappers can follow), one JSON object per frame event with
 //! `--progress json`, nothing with `--quiet`. stdout is never touched.
 
+use crate::claim::Held;
+use crate::console::printable;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
@@ -61,19 +63,71 @@ impl Progress {
     pub fn note(&self, text: &str) {
         match &self.mode {
             Mode::Quiet => {}
-            Mode::Lines => eprintln!("{text}"),
+            Mode::Lines => eprintln!("{}", printable(text)),
             Mode::Json => eprintln!("{{\"event\": \"note\", \"text\": {}}}", quote(text)),
-            Mode::Bar(bar) => bar.println(text),
+            Mode::Bar(bar) => bar.println(printable(text)),
         }
     }
 
     /// A warning: shown even with `--quiet`.
     pub fn warn(&self, text: &str) {
         match &self.mode {
-            Mode::Bar(bar) => bar.println(text),
+            Mode::Bar(bar) => bar.println(printable(text)),
             Mode::Json => eprintln!("{{\"event\": \"warning\", \"text\": {}}}", quote(text)),
-            _ => eprintln!("{text}"),
+            _ => eprintln!("{}", printable(text)),
         }
+    }
+
+    /// Frames other processes hold, and the first few of their claims: shown even with
+    /// `--quiet`, since a worker that waits must say on what.
+    pub fn waiting(&self, frames: &str, count: usize, claims: &[Held]) {
+        let age = |h: &Held| h.heartbeat.map_or(-1.0, |a| a.as_secs_f64());
+        if let Mode::Json = self.mode {
+            let claims: Vec<String> = claims
+                .iter()
+                .map(|h| {
+                    format!(
+                        "{{\"path\": {}, \"owner\": {}, \"heartbeat_seconds\": {:.0}}}",
+                        quote(&h.path.display().to_string()),
+                        quote(&h.owner),
+                        age(h)
+                    )
+                })
+                .collect();
+            eprintln!(
+                "{{\"event\": \"waiting\", \"frames\": {}, \"claims\": [{}]}}",
+                quote(frames),
+                claims.join(", ")
+            );
+            return;
+        }
+        let claims: Vec<String> = claims
+            .iter()
+            .map(|h| {
+                format!(
+                    "{} ({}, heartbeat {:.0} s ago)",
+                    h.path.display(),
+                    h.owner,
+                    age(h)
+                )
+            })
+            .collect();
+        let more = count.saturating_sub(claims.len());
+        self.warn(&format!(
+            "waiting for {count} frame{} ({frames}) that other processes hold: {}{}",
+            if count == 1 { "" } else { "s" },
+            claims.join(", "),
+            if more > 0 {
+                format!(" and {more} more")
+            } else {
+                String::new()
+            }
+        ));
+    }
+
+    /// Whether `frame_skipped` shows anything (one JSON line per frame).
+    pub fn reports_skipped(&self) -> bool {
+        matches!(self.mode, Mode::Json)
     }
 
     /// A frame that needs no work (`up-to-date`) or may not be touched (`foreign`).
@@ -91,15 +145,18 @@ impl Progress {
         match &self.mode {
             Mode::Quiet => {}
             Mode::Lines => eprintln!(
-                "frame {n}/{} written {destination} ({seconds:.2} s, {} of {} done)",
-                self.sequence_frames, self.done, self.total
+                "frame {n}/{} written {} ({seconds:.2} s, {} of {} done)",
+                self.sequence_frames,
+                printable(destination),
+                self.done,
+                self.total
             ),
             Mode::Json => eprintln!(
                 "{{\"event\": \"frame\", \"frame\": {n}, \"path\": {}, \"status\": \"written\", \"seconds\": {seconds:.4}}}",
                 quote(destination)
             ),
             Mode::Bar(bar) => {
-                bar.set_message(destination.to_string());
+                bar.set_message(printable(destination).into_owned());
                 bar.inc(1);
             }
         }

@@ -15,7 +15,7 @@ use crate::sequence::Sequence;
 use crate::tracer::{self, Settings, World};
 use std::collections::BTreeMap;
 use std::io::Write;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 use std::sync::{Arc, mpsc};
 use std::time::{Duration, Instant};
 
@@ -52,8 +52,9 @@ pub struct Job {
 pub enum Outcome {
     /// Every task done, except `held`: frames another live process has claimed.
     Complete { written: usize, held: Vec<u64> },
-    /// Ctrl-C or SIGTERM: frames in flight were finished, nothing new was started.
-    Interrupted { written: usize },
+    /// Ctrl-C or SIGTERM: frames in flight were cancelled, nothing new was started; frames
+    /// finished before stay written (and streamed).
+    Interrupted { written: usize, streamed: usize },
     /// The stream's reader closed the pipe; the remaining work was cancelled.
     ReaderClosed { streamed: usize },
 }
@@ -78,28 +79,49 @@ struct Delivery<'a> {
     /// Frames in flight under a claim, with when they were last refreshed.
     claimed: Vec<(u64, Instant)>,
     stop: Option<Result<Outcome, String>>,
+    /// Set once the run stops: frames in flight give up at their next pixel.
+    cancel: Arc<AtomicBool>,
+    /// When a signal was noticed.
+    signalled: Option<Instant>,
 }
 
-pub fn run(mut job: Job, progress: &mut Progress) -> Result<Outcome, String> {
-    return_frame_buffers_to_the_os();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(job.threads)
+/// What a worker sends back: the frame's bytes, `None` if it was cancelled, or why it failed.
+type Produced = Result<Option<Done>, String>;
+
+/// How often the run looks at signals, claims and workers.
+const TICK: Duration = Duration::from_millis(100);
+
+/// How long a stopping run waits for frames in flight to give up (they check at every pixel,
+/// so this only matters while one is being encoded) before it leaves them behind.
+const STOP_GRACE: Duration = Duration::from_secs(2);
+
+pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, String> {
+    run_on(&worker_pool(job.threads)?, job, progress)
+}
+
+/// The worker threads of a run; an error when the machine cannot start that many.
+pub fn worker_pool(threads: usize) -> Result<rayon::ThreadPool, String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
         .thread_name(|i| format!("rayreel-{i}"))
         .build()
-        .map_err(|e| format!("cannot start worker threads: {e}"))?;
-    let run_hash = job
-        .files
-        .as_ref()
-        .map(|f| fingerprint::of_run(&job.sequence.scene, &job.sequence.settings, &f.format));
+        .map_err(|e| format!("cannot start {threads} worker threads: {e}"))
+}
+
+/// `run` on threads already started (claim mode runs several passes on them).
+pub fn run_on(
+    pool: &rayon::ThreadPool,
+    mut job: Job,
+    progress: &mut Progress,
+) -> Result<Outcome, String> {
+    return_frame_buffers_to_the_os();
     let window = match job.stream {
         // A stream has its order to keep: one frame rendering (on every thread) while the one
         // before is written keeps memory to two frames whatever the reader does.
         Some(_) => 2,
         None => job.threads + EXTRA_IN_FLIGHT,
     };
-    let world = Arc::new(World::new(job.sequence.scene.clone()));
-    let (tx, rx) = mpsc::channel::<(u64, Result<Done, String>)>();
-    let mut pending = job.tasks.iter().copied();
+    let (tx, rx) = mpsc::channel::<(u64, Produced)>();
     let out = job
         .stream_out
         .take()
@@ -107,42 +129,35 @@ pub fn run(mut job: Job, progress: &mut Progress) -> Result<Outcome, String> {
     let mut d = Delivery {
         job: &job,
         progress,
-        stream: job.stream.map(|_| Reorder::new(&job.tasks, out)),
+        stream: job
+            .stream
+            .map(|_| Reorder::new(&job.tasks, StreamWriter::start(out))),
         written: 0,
         held: Vec::new(),
         claimed: Vec::new(),
         stop: None,
+        cancel: Arc::new(AtomicBool::new(false)),
+        signalled: None,
     };
+    let spawn = spawner(pool, &job, &d.cancel, tx);
+    let mut pending = job.tasks.iter().copied();
     let mut in_flight = 0;
     loop {
+        d.notice_signal(in_flight);
         // Frames rendered but held for the stream's order count too: a slow frame must not
         // let the others run ahead without bound.
         while d.stop.is_none() && in_flight + d.held_for_order() < window {
-            if interrupted() {
-                d.stop = Some(Ok(Outcome::Interrupted { written: 0 }));
-                break;
-            }
             let Some(task) = pending.next() else { break };
-            if !d.claim(task.frame) {
-                continue;
+            if d.claim(task.frame) {
+                spawn(task);
+                in_flight += 1;
             }
-            let (tx, seq, files) = (tx.clone(), Arc::clone(&job.sequence), job.files.clone());
-            let world = Arc::clone(&world);
-            let stream_format = job.stream;
-            in_flight += 1;
-            pool.spawn(move || {
-                let files = files.as_ref().zip(run_hash.as_ref());
-                let _ = tx.send((
-                    task.frame,
-                    produce(&world, &seq, task, files, stream_format),
-                ));
-            });
         }
-        if in_flight == 0 {
+        if in_flight == 0 || d.signalled.is_some_and(|t| t.elapsed() > STOP_GRACE) {
             break;
         }
         d.heartbeat();
-        match rx.recv_timeout(Duration::from_millis(500)) {
+        match rx.recv_timeout(TICK) {
             Ok((frame, done)) => {
                 in_flight -= 1;
                 d.deliver(frame, done);
@@ -151,15 +166,81 @@ pub fn run(mut job: Job, progress: &mut Progress) -> Result<Outcome, String> {
             Err(e) => return Err(format!("worker lost: {e}")),
         }
     }
-    let (written, held) = (d.written, d.held);
-    match d.stop {
-        None => Ok(Outcome::Complete { written, held }),
-        Some(Ok(Outcome::Interrupted { .. })) => Ok(Outcome::Interrupted { written }),
-        Some(other) => other,
+    d.finish()
+}
+
+/// Starts one frame on the pool; its result comes back through `tx`.
+fn spawner<'a>(
+    pool: &'a rayon::ThreadPool,
+    job: &Job,
+    cancel: &Arc<AtomicBool>,
+    tx: mpsc::Sender<(u64, Produced)>,
+) -> impl Fn(Task) + 'a {
+    let seq = Arc::clone(&job.sequence);
+    let world = Arc::new(World::new(seq.scene.clone()));
+    let files = job.files.clone();
+    let run_hash = files
+        .as_ref()
+        .map(|f| fingerprint::of_run(&seq.scene, &seq.settings, &f.format));
+    let (stream, cancel) = (job.stream, Arc::clone(cancel));
+    move |task| {
+        let (tx, seq, world, cancel) = (
+            tx.clone(),
+            Arc::clone(&seq),
+            Arc::clone(&world),
+            Arc::clone(&cancel),
+        );
+        let files = files.clone();
+        pool.spawn(move || {
+            let files = files.as_ref().zip(run_hash.as_ref());
+            let _ = tx.send((
+                task.frame,
+                produce(&world, &seq, task, files, stream, &cancel),
+            ));
+        });
     }
 }
 
 impl Delivery<'_> {
+    /// On the first Ctrl-C or SIGTERM: stop starting frames, cancel those in flight, and say
+    /// so at once.
+    fn notice_signal(&mut self, in_flight: usize) {
+        if self.signalled.is_some() || !interrupted() {
+            return;
+        }
+        self.signalled = Some(Instant::now());
+        self.stop = Some(Ok(Outcome::Interrupted {
+            written: 0,
+            streamed: 0,
+        }));
+        self.cancel.store(true, Ordering::SeqCst);
+        let what = match in_flight {
+            0 => "no frame is in flight".to_string(),
+            1 => "the frame in flight is cancelled at the next pixel".to_string(),
+            n => format!("the {n} frames in flight are cancelled at the next pixel"),
+        };
+        self.progress.warn(&format!(
+            "rayreel: stopping on {}: {what}; frames already written stay; exit code {} follows (a second signal exits at once)",
+            signal_name(),
+            interrupt_code()
+        ));
+    }
+
+    /// The run's outcome; claims still held for frames left behind are released.
+    fn finish(mut self) -> Result<Outcome, String> {
+        self.cancel.store(true, Ordering::SeqCst);
+        for (n, _) in self.claimed.clone() {
+            self.release(n);
+        }
+        let (written, held) = (self.written, self.held);
+        let streamed = self.stream.as_ref().map_or(0, |r| r.sent);
+        match self.stop {
+            None => Ok(Outcome::Complete { written, held }),
+            Some(Ok(Outcome::Interrupted { .. })) => Ok(Outcome::Interrupted { written, streamed }),
+            Some(other) => other,
+        }
+    }
+
     fn held_for_order(&self) -> usize {
         self.stream.as_ref().map_or(0, |r| r.held.len())
     }
@@ -207,13 +288,15 @@ impl Delivery<'_> {
     }
 
     /// Writes a finished frame's file and stream bytes, or records why it failed.
-    fn deliver(&mut self, frame: u64, done: Result<Done, String>) {
+    fn deliver(&mut self, frame: u64, done: Produced) {
         let done = match done {
-            Ok(d) => d,
+            Ok(Some(d)) => d,
+            Ok(None) => return self.release(frame),
             Err(e) => {
                 self.release(frame);
                 self.progress.frame_failed(frame, &e);
                 self.stop.get_or_insert(Err(e));
+                self.cancel.store(true, Ordering::SeqCst);
                 return;
             }
         };
@@ -225,19 +308,18 @@ impl Delivery<'_> {
                 let e = format!("{}: cannot write: {e}", path.display());
                 self.progress.frame_failed(frame, &e);
                 self.stop.get_or_insert(Err(e));
+                self.cancel.store(true, Ordering::SeqCst);
                 return;
             }
             self.written += 1;
             self.progress
                 .frame_done(frame, &path.display().to_string(), done.seconds);
         }
-        let closed = matches!(self.stop, Some(Ok(Outcome::ReaderClosed { .. })));
-        let (Some(order), Some(bytes)) = (self.stream.as_mut(), done.stream) else {
+        // Once stopping, the stream is cut where it is.
+        let (Some(order), Some(bytes), None) = (self.stream.as_mut(), done.stream, &self.stop)
+        else {
             return;
         };
-        if closed {
-            return;
-        }
         match order.push(frame, bytes, done.seconds) {
             Ok(sent) => {
                 for (n, seconds) in sent.into_iter().filter(|_| done.file.is_none()) {
@@ -248,7 +330,10 @@ impl Delivery<'_> {
                 self.stop = Some(Ok(Outcome::ReaderClosed {
                     streamed: order.sent,
                 }));
+                self.cancel.store(true, Ordering::SeqCst);
             }
+            // A signal came while the reader was not reading: `notice_signal` takes it up.
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
             Err(e) => {
                 self.stop
                     .get_or_insert(Err(format!("stdout: cannot write the stream: {e}")));
@@ -274,17 +359,23 @@ pub fn render_with(
     Ok(tracer::render(world, &exposure, settings, n))
 }
 
-/// A worker's whole job for one frame: render, then encode for each sink that wants it.
+/// A worker's whole job for one frame: render, then encode for each sink that wants it;
+/// `None` when `cancel` stopped it.
 fn produce(
     world: &World,
     seq: &Sequence,
     task: Task,
     files: Option<(&Files, &fingerprint::Hasher)>,
     stream: Option<(StreamFormat, bool)>,
-) -> Result<Done, String> {
+    cancel: &AtomicBool,
+) -> Produced {
     let start = Instant::now();
     let n = task.frame;
-    let frame = render_with(world, seq, n, &seq.settings)?;
+    let exposure = Exposure::of_frame(&seq.timeline, seq.settings.shutter, n)
+        .map_err(|e| format!("frame {n}: {e}"))?;
+    let Some(frame) = tracer::render_or_stop(world, &exposure, &seq.settings, n, cancel) else {
+        return Ok(None);
+    };
     let file = match files.filter(|_| task.write_file) {
         Some((files, run_hash)) => {
             let meta = frame_meta(seq, n, run_hash);
@@ -304,11 +395,11 @@ fn produce(
         None => None,
     };
     frame.recycle();
-    Ok(Done {
+    Ok(Some(Done {
         seconds: start.elapsed().as_secs_f64(),
         file,
         stream,
-    })
+    }))
 }
 
 pub fn frame_meta(seq: &Sequence, n: u64, run_hash: &fingerprint::Hasher) -> FrameMeta {
@@ -325,7 +416,7 @@ pub fn frame_meta(seq: &Sequence, n: u64, run_hash: &fingerprint::Hasher) -> Fra
 
 /// Puts stream bytes on stdout strictly in frame order, holding early arrivals.
 struct Reorder {
-    out: Box<dyn Write + Send>,
+    out: StreamWriter,
     order: Vec<u64>,
     next: usize,
     held: BTreeMap<u64, (Vec<u8>, f64)>,
@@ -333,7 +424,7 @@ struct Reorder {
 }
 
 impl Reorder {
-    fn new(tasks: &[Task], out: Box<dyn Write + Send>) -> Reorder {
+    fn new(tasks: &[Task], out: StreamWriter) -> Reorder {
         Reorder {
             out,
             order: tasks.iter().map(|t| t.frame).collect(),
@@ -352,35 +443,89 @@ impl Reorder {
         seconds: f64,
     ) -> std::io::Result<Vec<(u64, f64)>> {
         self.held.insert(frame, (bytes, seconds));
-        let out = &mut self.out;
         let mut sent = Vec::new();
         while let Some(&n) = self.order.get(self.next) {
             let Some((bytes, seconds)) = self.held.remove(&n) else {
                 break;
             };
-            out.write_all(&bytes)?;
+            self.out.write(bytes)?;
             self.next += 1;
             self.sent += 1;
             sent.push((n, seconds));
         }
-        out.flush()?;
         Ok(sent)
     }
 }
 
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-pub fn interrupted() -> bool {
-    INTERRUPTED.load(Ordering::SeqCst)
+/// Writes the stream on a thread of its own: a reader that stops reading blocks that thread
+/// only, so the run still notices a signal, and one Ctrl-C ends it.
+struct StreamWriter {
+    frames: mpsc::Sender<Vec<u8>>,
+    written: mpsc::Receiver<std::io::Result<()>>,
 }
 
-/// The first Ctrl-C or SIGTERM asks the run to stop after the frames in flight; a second one
-/// exits at once (a later run removes any temporary file that leaves behind).
+impl StreamWriter {
+    fn start(mut out: Box<dyn Write + Send>) -> StreamWriter {
+        let (frames, todo) = mpsc::channel::<Vec<u8>>();
+        let (done, written) = mpsc::channel();
+        std::thread::spawn(move || {
+            for bytes in todo {
+                let result = out.write_all(&bytes).and_then(|()| out.flush());
+                if done.send(result).is_err() {
+                    break;
+                }
+            }
+        });
+        StreamWriter { frames, written }
+    }
+
+    /// Writes one frame; `Interrupted` if a signal comes first.
+    fn write(&mut self, bytes: Vec<u8>) -> std::io::Result<()> {
+        let gone = || std::io::Error::from(std::io::ErrorKind::BrokenPipe);
+        self.frames.send(bytes).map_err(|_| gone())?;
+        loop {
+            match self.written.recv_timeout(TICK) {
+                Ok(result) => return result,
+                Err(mpsc::RecvTimeoutError::Timeout) if interrupted() => {
+                    return Err(std::io::ErrorKind::Interrupted.into());
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+                Err(mpsc::RecvTimeoutError::Disconnected) => return Err(gone()),
+            }
+        }
+    }
+}
+
+/// The first Ctrl-C (SIGINT) or SIGTERM, 0 before one comes.
+static SIGNAL: AtomicI32 = AtomicI32::new(0);
+
+pub fn interrupted() -> bool {
+    SIGNAL.load(Ordering::SeqCst) != 0
+}
+
+/// The exit code for the signal that came: 128 + its number (130 SIGINT, 143 SIGTERM).
+pub fn interrupt_code() -> u8 {
+    (128 + SIGNAL.load(Ordering::SeqCst)).clamp(0, 255) as u8
+}
+
+fn signal_name() -> &'static str {
+    match SIGNAL.load(Ordering::SeqCst) {
+        libc::SIGTERM => "SIGTERM",
+        _ => "SIGINT",
+    }
+}
+
+/// The first Ctrl-C or SIGTERM asks the run to stop: frames in flight are cancelled, the
+/// finished ones stay. A second one exits at once with 128 + its number (a later run removes
+/// any temporary file that leaves behind).
 pub fn install_interrupt_handler() {
-    extern "C" fn on_signal(_: libc::c_int) {
-        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+    extern "C" fn on_signal(signal: libc::c_int) {
+        if SIGNAL
+            .compare_exchange(0, signal, Ordering::SeqCst, Ordering::SeqCst)
+            .is_err()
+        {
             // SAFETY: _exit is async-signal-safe.
-            unsafe { libc::_exit(130) };
+            unsafe { libc::_exit(128 + signal) };
         }
     }
     for signal in [libc::SIGINT, libc::SIGTERM] {

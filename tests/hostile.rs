@@ -8,56 +8,13 @@
 mod common;
 use common::*;
 
-use std::io::{Read, Write};
+use std::io::Write;
 use std::path::Path;
-use std::process::{Child, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Stdio;
+use std::time::Instant;
 
 const MAX_SECONDS: f64 = 1.0;
 const MAX_PEAK_KB: u64 = 100 * 1024;
-
-struct Run {
-    code: Option<i32>,
-    stderr: String,
-    seconds: f64,
-    peak_kb: u64,
-}
-
-/// Waits for `child` while `feed` runs, with its exit code, stderr, wall time and peak RSS.
-fn measure(mut child: Child, started: Instant, feed: impl FnOnce(&mut Child)) -> Run {
-    let pid = child.id() as libc::pid_t;
-    let mut err = child.stderr.take().expect("stderr is piped");
-    let reader = std::thread::spawn(move || {
-        let mut s = String::new();
-        let _ = err.read_to_string(&mut s);
-        s
-    });
-    feed(&mut child);
-    let mut status = 0;
-    // SAFETY: a zeroed rusage is a valid value for wait4 to fill in.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    let deadline = started + Duration::from_secs(60);
-    loop {
-        // SAFETY: pid is our own unreaped child; status and usage outlive the call.
-        let r = unsafe { libc::wait4(pid, &mut status, libc::WNOHANG, &mut usage) };
-        if r == pid {
-            break;
-        }
-        assert_eq!(r, 0, "wait4: {}", std::io::Error::last_os_error());
-        if Instant::now() > deadline {
-            // Not reaped yet, so the pid is still ours to kill.
-            child.kill().unwrap();
-        }
-        std::thread::sleep(Duration::from_millis(2));
-    }
-    let seconds = started.elapsed().as_secs_f64();
-    Run {
-        code: libc::WIFEXITED(status).then(|| libc::WEXITSTATUS(status)),
-        stderr: reader.join().unwrap(),
-        seconds,
-        peak_kb: usage.ru_maxrss as u64,
-    }
-}
 
 fn check(dir: &Path, name: &str) -> Run {
     let started = Instant::now();

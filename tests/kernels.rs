@@ -287,3 +287,41 @@ fn frames_from_every_kernel_equal_the_scalar_kernels() {
     let out = run_in(&tmp, &["check", "seq.yaml"]);
     assert!(out.status.success(), "{}", stderr(&out));
 }
+
+/// The wide kernels are generic code inlined into `#[target_feature]` functions; anything on
+/// that path the compiler cannot inline (a closure doing lane arithmetic, for instance) turns
+/// each SIMD instruction into a call and the kernel several times slower while every test
+/// still passes. The binary must call no SIMD intrinsic out of line except CPU detection's.
+#[test]
+fn no_simd_intrinsic_is_left_out_of_line() {
+    if !common::have_tool("objdump") {
+        return;
+    }
+    let out = std::process::Command::new("objdump")
+        .args([
+            "-d",
+            "--no-show-raw-insn",
+            "-C",
+            env!("CARGO_BIN_EXE_rayreel"),
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    let mut function = "";
+    let calls: Vec<String> = text
+        .lines()
+        .filter_map(|l| {
+            if l.ends_with(">:") {
+                function = l;
+            }
+            (l.contains("call") && l.contains("core_arch") && !l.contains("xgetbv"))
+                .then(|| format!("{function} {l}"))
+        })
+        .collect();
+    assert!(
+        calls.is_empty(),
+        "out-of-line SIMD calls:\n{}",
+        calls.join("\n")
+    );
+}

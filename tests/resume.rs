@@ -41,6 +41,14 @@ fn killed_at_any_moment_resumes_to_the_identical_sequence() {
     let heavy = ["--size", "640x360", "--samples", "9", "-q"];
     render(&tmp, &[&["-o", "clean/f_####.png"][..], &heavy].concat());
     let mut cut_short = 0;
+    let expected = rayreel::output::Expected {
+        width: 640,
+        height: 360,
+        format: rayreel::output::FileFormat::Png {
+            sixteen_bit: false,
+            compression: rayreel::output::png::Compression::Fast,
+        },
+    };
     for (i, delay_ms) in [30u64, 60, 90, 120, 150, 200, 260, 330, 420, 520, 40, 75]
         .iter()
         .enumerate()
@@ -70,7 +78,7 @@ fn killed_at_any_moment_resumes_to_the_identical_sequence() {
             let bytes = std::fs::read(tmp.join("out").join(f)).unwrap();
             assert!(
                 matches!(
-                    rayreel::output::png::inspect(&bytes),
+                    rayreel::output::png::inspect(&bytes, &expected),
                     rayreel::output::Existing::Ours(_)
                 ),
                 "{f}"

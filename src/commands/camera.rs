@@ -20,10 +20,10 @@ pub fn camera(args: CameraArgs) -> Result<(), Error> {
         Some(spec) => spec
             .frames(count)
             .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
-        None => (0..count).collect(),
+        None => crate::frameset::FrameSet::range(0, count - 1, 1),
     };
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
-    let mut lines = frames.iter().map(|&n| line(&seq, n, args.format));
+    let mut lines = frames.iter().map(|n| line(&seq, n, args.format));
     let header = (args.format == CameraFormat::Csv).then(|| CSV_HEADER.to_string());
     let written = header
         .into_iter()

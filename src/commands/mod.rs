@@ -5,6 +5,7 @@ mod render;
 
 use crate::Error;
 use crate::cli::{BenchArgs, CheckArgs, Cli, Command, MeasureArgs, PreviewArgs};
+use crate::console::{self, printable};
 use crate::output;
 use crate::scene::{Light, Shape};
 use crate::sequence::{self, Overrides, Sequence};
@@ -45,18 +46,21 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
     let (seq, problem) = sequence::load_drawable(&args.file, &Overrides::default())?;
     let count = seq.timeline.frame_count;
     let frames = match &args.frames {
-        Some(spec) => spec
-            .frames(count)
-            .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
+        Some(spec) => {
+            let set = spec
+                .frames(count)
+                .map_err(|e| Error::Usage(format!("--frames: {e}")))?;
+            if set.len() > preview::MAX_TILES {
+                return Err(Error::Usage(format!(
+                    "--frames: {} frames; a contact sheet holds at most {}",
+                    set.len(),
+                    preview::MAX_TILES
+                )));
+            }
+            set.iter().collect()
+        }
         None => preview::evenly_spaced(count, args.tiles),
     };
-    if frames.len() as u64 > preview::MAX_TILES {
-        return Err(Error::Usage(format!(
-            "--frames: {} frames; a contact sheet holds at most {}",
-            frames.len(),
-            preview::MAX_TILES
-        )));
-    }
     let dir = args
         .out
         .unwrap_or_else(|| Path::new("frames").join(&seq.name).join("preview"));
@@ -65,24 +69,86 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
     let reason = problem.as_ref().map(|p| p.to_string());
     let (plot, warnings) = preview::path_plot(&seq, reason.as_deref());
     for w in seq.warnings.iter().chain(&warnings) {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", printable(w));
     }
     let plot_file = dir.join(format!("{}_path.png", seq.name));
     preview::write_png(&plot_file, &plot).map_err(Error::Failed)?;
-    println!("{}", plot_file.display());
+    out(&format!("{}\n", shown(&plot_file)))?;
     let (sheet, _) =
         preview::contact_sheet(&seq, &frames, preview::TILE_WIDTH).map_err(Error::Failed)?;
     let sheet_file = dir.join(format!("{}_sheet.png", seq.name));
     preview::write_png(&sheet_file, &sheet).map_err(Error::Failed)?;
-    println!("{}", sheet_file.display());
+    out(&format!("{}\n", shown(&sheet_file)))?;
     problem.map_or(Ok(()), |p| Err(Error::Load(p)))
 }
 
 fn check(args: CheckArgs) -> Result<(), Error> {
     let seq = sequence::load(&args.file, &Overrides::default())?;
     print_warnings(&seq);
-    print!("{}", summary(&args.file.display().to_string(), &seq));
-    Ok(())
+    let (cost, warning) = cost(&seq, seq.timeline.frame_count);
+    if let Some(w) = warning {
+        eprintln!("{w}");
+    }
+    out(&format!(
+        "{}  cost:       {cost}\n",
+        summary(&shown(&args.file), &seq)
+    ))
+}
+
+/// Jobs above this many rays are called enormous: about 9 hours at `RAYS_PER_SECOND`.
+pub const ENORMOUS_RAYS: f64 = 1e12;
+/// Rays a second of the 2-core machine measured under Performance in the README.
+const RAYS_PER_SECOND: f64 = 3e7;
+
+/// An upper bound on the rays one frame traces: pixels × samples (adaptive: its maximum) ×
+/// (1 + lights that cast shadows) × max_depth, since each surface a path visits sends one ray
+/// on and at most one shadow ray per light.
+pub fn rays_per_frame(seq: &Sequence) -> f64 {
+    let s = &seq.settings;
+    let samples = s.adaptive.map_or(s.samples, |a| a.max_samples);
+    let shadows = seq
+        .scene
+        .lights
+        .iter()
+        .filter(|l| !matches!(l, Light::Ambient { .. }))
+        .count();
+    f64::from(s.width)
+        * f64::from(s.height)
+        * f64::from(samples)
+        * (1 + shadows) as f64
+        * f64::from(s.max_depth)
+}
+
+/// `up to 2.76e9 rays a frame, 3.98e11 for 144 frames (…)`, and a warning for an enormous
+/// job.
+pub(crate) fn cost(seq: &Sequence, frames: u64) -> (String, Option<String>) {
+    let frame = rays_per_frame(seq);
+    let total = frame * frames as f64;
+    let line = format!(
+        "up to {frame:.2e} rays a frame, {total:.2e} for {frames} frame{} (pixels × samples × (1 + lights) × max_depth)",
+        if frames == 1 { "" } else { "s" }
+    );
+    let warning = (total > ENORMOUS_RAYS).then(|| {
+        format!(
+            "warning: this job may trace up to {total:.2e} rays, about {} at {RAYS_PER_SECOND:.0e} rays/s; check the size, render.samples and render.max_depth (Ctrl-C or SIGTERM stops a render within about a second)",
+            duration(total / RAYS_PER_SECOND)
+        )
+    });
+    (line, warning)
+}
+
+/// `3.2 hours`, `41 years`.
+fn duration(seconds: f64) -> String {
+    let units = [
+        (31_557_600.0, "years"),
+        (86_400.0, "days"),
+        (3600.0, "hours"),
+        (60.0, "minutes"),
+    ];
+    match units.iter().find(|(unit, _)| seconds >= 2.0 * unit) {
+        Some((unit, name)) => format!("{:.0} {name}", seconds / unit),
+        None => format!("{seconds:.0} seconds"),
+    }
 }
 
 /// The one-screen description `rayreel check` prints.
@@ -138,7 +204,7 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
         t.fps,
         t.frame_count as f64 / t.fps,
         timing(t),
-        seq.output
+        printable(&seq.output)
     )
 }
 
@@ -219,13 +285,13 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
     eprintln!(
         "measuring frame {} of {} at {w}x{h}",
         args.frame,
-        args.file.display()
+        shown(&args.file)
     );
     let report = crate::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
         eprintln!("  {line}")
     })
     .map_err(Error::Failed)?;
-    print!("{}", report.table());
+    out(&report.table())?;
     for (name, text) in [
         ("measure.csv", report.csv()),
         ("measure.json", report.json()),
@@ -234,7 +300,7 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
         let path = dir.join(name);
         output::atomic::write_atomic(&path, text.as_bytes())
             .map_err(|e| Error::Failed(format!("{}: cannot write: {e}", path.display())))?;
-        eprintln!("wrote {}", path.display());
+        eprintln!("wrote {}", shown(&path));
     }
     Ok(())
 }
@@ -245,5 +311,19 @@ fn bench(args: BenchArgs) -> Result<(), Error> {
         only: args.only,
         quick: args.quick,
     };
-    crate::bench::run(&options, &mut |line| println!("{line}")).map_err(Error::Failed)
+    // A reader that has gone ends the output, not the benchmark's own error reporting.
+    crate::bench::run(&options, &mut |line| {
+        let _ = console::print(&format!("{line}\n"));
+    })
+    .map_err(Error::Failed)
+}
+
+/// A path as the terminal may show it (see `console::printable`).
+pub(crate) fn shown(path: &Path) -> String {
+    printable(&path.display().to_string()).into_owned()
+}
+
+/// Text on stdout; a closed stdout is a normal end (see `console::print`).
+pub(crate) fn out(text: &str) -> Result<(), Error> {
+    console::print(text).map_err(Error::Failed)
 }

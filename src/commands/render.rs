@@ -1,20 +1,21 @@
 //! `render` and `status`: the same job description (sequence, overrides, frames, shard,
 //! format) either rendered or only inspected.
 
+use super::{out, shown};
 use crate::Error;
-use crate::claim::Claims;
+use crate::claim::{self, Claims, Held};
 use crate::cli::{JobArgs, ProgressFormat, RenderArgs, StatusArgs, resolve_shard};
+use crate::frameset::FrameSet;
 use crate::output::{self, FileFormat, pattern::Pattern, stream::StreamFormat};
 use crate::plan::{self, Plan, State};
 use crate::progress::Progress;
 use crate::schedule::{self, Files, Job, Outcome, Task};
 use crate::sequence::{self, Overrides, Sequence};
-use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// The validated sequence and this task's frames.
-fn load(job: &JobArgs) -> Result<(Sequence, Vec<u64>), Error> {
+fn load(job: &JobArgs) -> Result<(Sequence, FrameSet), Error> {
     let overrides = Overrides {
         size: job.size,
         max_depth: job.max_depth,
@@ -29,19 +30,19 @@ fn load(job: &JobArgs) -> Result<(Sequence, Vec<u64>), Error> {
         Some(spec) => spec
             .frames(count)
             .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
-        None => (0..count).collect(),
+        None => FrameSet::range(0, count - 1, 1),
     };
     if let Some(spec) = job.shard {
         let env = |name: &str| std::env::var(name).ok();
         let (k, n) = resolve_shard(spec, job.shard_count, &env)
             .map_err(|e| Error::Usage(format!("--shard: {e}")))?;
-        frames = plan::shard(&frames, k, n);
+        frames = frames.shard(k, n);
     }
     Ok((seq, frames))
 }
 
-/// The file pattern and format; `create` makes the directory and clears our stale temporaries.
-fn file_sink(seq: &Sequence, job: &JobArgs, create: bool) -> Result<Files, Error> {
+/// The file pattern and format.
+fn file_sink(seq: &Sequence, job: &JobArgs) -> Result<Files, Error> {
     let sixteen = job.bit_depth == "16";
     let pattern = Pattern::new(&seq.output, seq.timeline.frame_count).map_err(Error::Usage)?;
     let format = FileFormat::for_extension(
@@ -63,21 +64,17 @@ fn file_sink(seq: &Sequence, job: &JobArgs, create: bool) -> Result<Files, Error
             seq.output
         )));
     }
-    if create {
-        let dir = directory(&pattern);
-        std::fs::create_dir_all(&dir).map_err(|e| {
-            Error::Failed(format!("{}: cannot create directory: {e}", dir.display()))
-        })?;
-        output::atomic::clean_leftovers(&dir);
-    }
     Ok(Files { pattern, format })
 }
 
-fn directory(pattern: &Pattern) -> PathBuf {
-    match pattern.frame_path(0).parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    }
+/// Makes the frames' directory and removes this job's temporaries that processes which are
+/// gone left there.
+fn prepare(files: &Files, frames: &FrameSet) -> Result<(), Error> {
+    let dir = plan::directory(&files.pattern.frame_path(0));
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
+    output::atomic::clean_leftovers(&dir, &files.pattern, frames);
+    Ok(())
 }
 
 pub fn render(args: RenderArgs) -> Result<(), Error> {
@@ -85,7 +82,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     let warnings = super::warnings(&seq);
     // With --pipe the stream is the product; files come too only when asked for explicitly.
     let files = match args.pipe.is_none() || args.job.output.is_some() {
-        true => Some(file_sink(&seq, &args.job, !args.dry_run)?),
+        true => Some(file_sink(&seq, &args.job)?),
         false => None,
     };
     if args.claim && (files.is_none() || args.pipe.is_some()) {
@@ -94,24 +91,27 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
                 .into(),
         ));
     }
+    if args.dry_run {
+        warnings.iter().for_each(|w| eprintln!("warning: {w}"));
+        let plan = files
+            .as_ref()
+            .map(|f| plan::plan(&seq, &frames, f, args.force));
+        return print_dry_run(&seq, plan.as_ref(), &frames);
+    }
+    let (pool, threads) = workers(args.threads)?;
+    if let Some(files) = &files {
+        prepare(files, &frames)?;
+    }
     let stream = args.pipe.map(|p| (p, args.job.bit_depth == "16"));
     let plan = files
         .as_ref()
         .map(|f| plan::plan(&seq, &frames, f, args.force));
-    if args.dry_run {
-        warnings.iter().for_each(|w| eprintln!("warning: {w}"));
-        print_dry_run(plan.as_ref(), &frames);
-        return Ok(());
-    }
     let tasks = tasks(&frames, plan.as_ref(), stream.is_some());
-    let threads = match args.threads {
-        Some(t) => usize::from(t),
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
-    let count = seq.timeline.frame_count;
     let mut progress = match args.progress {
-        ProgressFormat::Json if !args.quiet => Progress::json(tasks.len() as u64, count),
-        _ => Progress::new(tasks.len() as u64, count, args.quiet),
+        ProgressFormat::Json if !args.quiet => {
+            Progress::json(tasks.len() as u64, seq.timeline.frame_count)
+        }
+        _ => Progress::new(tasks.len() as u64, seq.timeline.frame_count, args.quiet),
     };
     for w in &warnings {
         progress.warn(&format!("warning: {w}"));
@@ -123,7 +123,6 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     if let Some((format, sixteen)) = stream {
         stream_notes(&progress, &seq, format, sixteen, args.print_ffmpeg);
     }
-    schedule::install_interrupt_handler();
     let claims = args
         .claim
         .then(|| Arc::new(Claims::new(Duration::from_secs(args.claim_timeout))));
@@ -136,33 +135,72 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         threads,
         claims,
     };
-    let written: Vec<u64> = job
-        .tasks
+    let outcome = run_job(&pool, job, &frames, &mut progress)?;
+    finish(outcome, plan.as_ref(), stream.is_some())
+}
+
+/// The worker threads, started before anything else happens: a count the machine cannot
+/// start is refused at once (exit 2 when it was asked for with --threads).
+fn workers(asked: Option<u16>) -> Result<(rayon::ThreadPool, usize), Error> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = asked.map_or(cores, usize::from);
+    let pool = schedule::worker_pool(threads).map_err(|e| match asked {
+        Some(_) => Error::Usage(format!(
+            "--threads {threads}: {e}; this machine has {cores} cores, and more threads than cores do not render faster"
+        )),
+        None => Error::Failed(e),
+    })?;
+    Ok((pool, threads))
+}
+
+/// Runs the job (cooperating through claims if asked), then checks what it wrote.
+fn run_job(
+    pool: &rayon::ThreadPool,
+    job: Job,
+    frames: &FrameSet,
+    progress: &mut Progress,
+) -> Result<Result<Outcome, String>, Error> {
+    let mut written = FrameSet::new();
+    job.tasks
         .iter()
         .filter(|t| t.write_file)
-        .map(|t| t.frame)
-        .collect();
+        .for_each(|t| written.push(t.frame));
     let (seq, files) = (Arc::clone(&job.sequence), job.files.clone());
+    schedule::install_interrupt_handler();
     let outcome = match job.claims.is_some() {
-        true => cooperate(job, &frames, &mut progress),
-        false => schedule::run(job, &mut progress),
+        true => cooperate(pool, job, frames, progress),
+        false => schedule::run_on(pool, job, progress),
     };
     progress.finish();
     if let (Ok(Outcome::Complete { .. }), Some(files)) = (&outcome, &files) {
         verify(&seq, &written, files)?;
     }
-    finish(outcome, plan.as_ref())
+    Ok(outcome)
 }
 
 /// After a complete run, every frame it wrote must still be there and intact: a file that
 /// vanished or was replaced meanwhile (another program, a full disk elsewhere) is reported
 /// rather than assumed done.
-fn verify(seq: &Sequence, written: &[u64], files: &Files) -> Result<(), Error> {
+fn verify(seq: &Sequence, written: &FrameSet, files: &Files) -> Result<(), Error> {
     let check = plan::plan(seq, written, files, false);
-    let bad: Vec<String> = check
-        .frames
+    let mut bad: Vec<(u64, State)> = check
+        .why
+        .into_iter()
+        .map(|(n, why)| (n, State::Corrupt(why)))
+        .collect();
+    for (set, state) in [
+        (&check.stale, State::Stale),
+        (&check.missing, State::Missing),
+        (&check.foreign, State::Foreign),
+    ] {
+        bad.extend(set.iter().map(|n| (n, state.clone())));
+    }
+    if bad.is_empty() {
+        return Ok(());
+    }
+    bad.sort_by_key(|(n, _)| *n);
+    let bad: Vec<String> = bad
         .iter()
-        .filter(|(_, s)| *s != State::UpToDate)
         .map(|(n, s)| {
             format!(
                 "{} ({})",
@@ -171,9 +209,6 @@ fn verify(seq: &Sequence, written: &[u64], files: &Files) -> Result<(), Error> {
             )
         })
         .collect();
-    if bad.is_empty() {
-        return Ok(());
-    }
     Err(Error::Failed(format!(
         "frames written by this run changed before it ended: {}; run the same command again to render them",
         bad.join(", ")
@@ -191,11 +226,19 @@ fn describe(s: &State) -> String {
 }
 
 /// Claim mode: render what can be claimed, then keep re-planning until every frame is up to
-/// date, waiting on frames other live processes hold and taking over those whose owner died.
-fn cooperate(mut job: Job, frames: &[u64], progress: &mut Progress) -> Result<Outcome, String> {
+/// date, waiting on frames other live processes hold (and saying so) and taking over those
+/// whose owner died or went silent.
+fn cooperate(
+    pool: &rayon::ThreadPool,
+    mut job: Job,
+    frames: &FrameSet,
+    progress: &mut Progress,
+) -> Result<Outcome, String> {
     let mut written = 0;
+    let mut told: Option<Instant> = None;
     loop {
-        let outcome = schedule::run(
+        let outcome = schedule::run_on(
+            pool,
             Job {
                 tasks: std::mem::take(&mut job.tasks),
                 claims: job.claims.clone(),
@@ -211,10 +254,20 @@ fn cooperate(mut job: Job, frames: &[u64], progress: &mut Progress) -> Result<Ou
             return Ok(outcome);
         };
         written += w;
-        if !held.is_empty() {
-            std::thread::sleep(Duration::from_millis(500));
+        if schedule::interrupted() {
+            return Ok(Outcome::Interrupted {
+                written,
+                streamed: 0,
+            });
         }
         let files = job.files.as_ref().expect("claim mode has files");
+        if !held.is_empty() {
+            if told.is_none_or(|t| t.elapsed() >= WAITING_REPORT_EVERY) {
+                report_waiting(progress, files, &held);
+                told = Some(Instant::now());
+            }
+            std::thread::sleep(Duration::from_millis(500));
+        }
         let plan = plan::plan(&job.sequence, frames, files, false);
         job.tasks = tasks(frames, Some(&plan), false);
         if job.tasks.is_empty() {
@@ -229,51 +282,67 @@ fn cooperate(mut job: Job, frames: &[u64], progress: &mut Progress) -> Result<Ou
     }
 }
 
-fn print_dry_run(plan: Option<&Plan>, frames: &[u64]) {
-    match plan {
+/// How often a waiting process repeats what it waits for.
+const WAITING_REPORT_EVERY: Duration = Duration::from_secs(30);
+
+/// Which frames other processes hold, with the first few claims' paths and owners.
+fn report_waiting(progress: &Progress, files: &Files, held: &[u64]) {
+    let mut set = FrameSet::new();
+    held.iter().for_each(|&n| set.push(n));
+    let claims: Vec<Held> = held
+        .iter()
+        .take(3)
+        .map(|&n| claim::held(&files.pattern.frame_path(n)))
+        .collect();
+    progress.waiting(&set.to_string(), held.len(), &claims);
+}
+
+fn print_dry_run(seq: &Sequence, plan: Option<&Plan>, frames: &FrameSet) -> Result<(), Error> {
+    let (text, rendering) = match plan {
         Some(plan) => {
-            println!("{}", plan.summary());
-            println!("would render: {}", plan::compress(&plan.to_render()));
+            let render = plan.to_render();
+            let text = format!("{}\nwould render: {render}\n", plan.summary());
+            (text, render.len())
         }
-        None => println!("would stream frames: {}", plan::compress(frames)),
+        None => (format!("would stream frames: {frames}\n"), frames.len()),
+    };
+    let (cost, warning) = super::cost(seq, rendering);
+    if let Some(w) = warning {
+        eprintln!("{w}");
     }
+    out(&format!("{text}cost: {cost}\n"))
 }
 
 /// Every selected frame when streaming (files written only where the plan says), otherwise
 /// just the frames the plan renders.
-fn tasks(frames: &[u64], plan: Option<&Plan>, streaming: bool) -> Vec<Task> {
-    let Some(plan) = plan else {
-        return frames
-            .iter()
-            .map(|&frame| Task {
-                frame,
-                write_file: false,
-            })
-            .collect();
-    };
-    plan.frames
-        .iter()
-        .filter(|(_, s)| streaming || plan.renders(s))
-        .map(|(frame, s)| Task {
-            frame: *frame,
-            write_file: plan.renders(s),
-        })
-        .collect()
+fn tasks(frames: &FrameSet, plan: Option<&Plan>, streaming: bool) -> Vec<Task> {
+    let task = |frame, write_file| Task { frame, write_file };
+    match plan {
+        None => frames.iter().map(|n| task(n, false)).collect(),
+        Some(plan) if streaming => {
+            let render = plan.to_render();
+            frames.iter().map(|n| task(n, render.contains(n))).collect()
+        }
+        Some(plan) => plan.to_render().iter().map(|n| task(n, true)).collect(),
+    }
 }
 
 fn report_skipped(progress: &Progress, plan: &Plan, files: &Files) {
-    for (n, state) in &plan.frames {
-        let path = files.pattern.frame_path(*n).display().to_string();
-        match state {
-            State::UpToDate if !plan.force => progress.frame_skipped(*n, &path, "up-to-date"),
-            State::Foreign if !plan.force => {
-                progress.frame_skipped(*n, &path, "foreign");
-                progress.warn(&format!(
-                    "{path}: not written by rayreel (no fingerprint); leaving it alone (use --force to overwrite)"
-                ));
-            }
-            _ => {}
+    if plan.force {
+        return;
+    }
+    let path = |n| files.pattern.frame_path(n).display().to_string();
+    if progress.reports_skipped() {
+        for n in plan.up_to_date.iter() {
+            progress.frame_skipped(n, &path(n), "up-to-date");
         }
+    }
+    for n in plan.foreign.iter() {
+        progress.frame_skipped(n, &path(n), "foreign");
+        progress.warn(&format!(
+            "{}: not written by rayreel (no fingerprint); leaving it alone (use --force to overwrite)",
+            path(n)
+        ));
     }
 }
 
@@ -296,7 +365,30 @@ fn stream_notes(
     }
 }
 
-fn finish(outcome: Result<Outcome, String>, plan: Option<&Plan>) -> Result<(), Error> {
+/// `interrupted: 3 frames written and 14 streamed to stdout in this run; …`.
+fn interrupted_summary(
+    written: usize,
+    streamed: usize,
+    plan: Option<&Plan>,
+    streaming: bool,
+) -> String {
+    let frames = |n: usize| format!("{n} frame{}", if n == 1 { "" } else { "s" });
+    let done = match (plan.is_some(), streaming) {
+        (true, true) => format!(
+            "{} written and {streamed} streamed to stdout",
+            frames(written)
+        ),
+        (false, _) => format!("{} streamed to stdout", frames(streamed)),
+        (true, false) => format!("{} written", frames(written)),
+    };
+    format!("interrupted: {done} in this run; run the same command again to render the rest")
+}
+
+fn finish(
+    outcome: Result<Outcome, String>,
+    plan: Option<&Plan>,
+    streaming: bool,
+) -> Result<(), Error> {
     match outcome.map_err(Error::Failed)? {
         Outcome::Complete { .. } => {
             let blocked = plan.map(Plan::blocked).unwrap_or_default();
@@ -304,14 +396,13 @@ fn finish(outcome: Result<Outcome, String>, plan: Option<&Plan>) -> Result<(), E
                 return Ok(());
             }
             Err(Error::Failed(format!(
-                "frames {} were not written: files rayreel did not write are in the way (use --force to overwrite them)",
-                plan::compress(&blocked)
+                "frames {blocked} were not written: files rayreel did not write are in the way (use --force to overwrite them)"
             )))
         }
-        Outcome::Interrupted { written } => Err(Error::Interrupted(format!(
-            "interrupted: {written} frame{} written in this run; run the same command again to render the rest",
-            if written == 1 { "" } else { "s" }
-        ))),
+        Outcome::Interrupted { written, streamed } => Err(Error::Interrupted(
+            interrupted_summary(written, streamed, plan, streaming),
+            schedule::interrupt_code(),
+        )),
         Outcome::ReaderClosed { streamed } => {
             eprintln!("rayreel: the reader closed the stream after {streamed} frames; stopping");
             Ok(())
@@ -323,42 +414,26 @@ fn finish(outcome: Result<Outcome, String>, plan: Option<&Plan>) -> Result<(), E
 /// every selected frame is up to date.
 pub fn status(args: StatusArgs) -> Result<(), Error> {
     let (seq, frames) = load(&args.job)?;
-    let files = file_sink(&seq, &args.job, false)?;
+    let files = file_sink(&seq, &args.job)?;
     let plan = plan::plan(&seq, &frames, &files, false);
-    let dir = directory(&files.pattern);
-    let mut lines = vec![format!("{}: {}", dir.display(), plan.status_line())];
-    for (label, pick) in [
-        (
-            "up to date",
-            &(|s: &State| *s == State::UpToDate) as &dyn Fn(&State) -> bool,
-        ),
-        ("stale", &|s: &State| *s == State::Stale),
-        ("missing", &|s: &State| *s == State::Missing),
-        ("corrupt", &|s: &State| matches!(s, State::Corrupt(_))),
-        ("foreign", &|s: &State| *s == State::Foreign),
-    ] {
-        let list: Vec<u64> = plan
-            .frames
-            .iter()
-            .filter(|(_, s)| pick(s))
-            .map(|(n, _)| *n)
-            .collect();
-        if !list.is_empty() {
-            lines.push(format!("  {label:<11} {}", plan::compress(&list)));
+    let dir = plan::directory(&files.pattern.frame_path(0));
+    let mut lines = vec![format!("{}: {}", shown(&dir), plan.status_line())];
+    for (label, set) in plan.by_state() {
+        if !set.is_empty() {
+            lines.push(format!("  {label:<11} {set}"));
         }
     }
-    println!("{}", lines.join("\n"));
-    let incomplete = plan
-        .frames
-        .iter()
-        .filter(|(_, s)| *s != State::UpToDate)
-        .count();
-    if incomplete == 0 {
+    // A closed stdout ends the listing, not the verdict: the exit code still says whether
+    // every frame is up to date.
+    out(&format!("{}\n", lines.join("\n")))?;
+    let done = plan.up_to_date.len();
+    let selected = plan.selected_count();
+    if done == selected {
         Ok(())
     } else {
         Err(Error::Incomplete(format!(
-            "{incomplete} of {} frames are not up to date",
-            plan.frames.len()
+            "{} of {selected} frames are not up to date",
+            selected - done
         )))
     }
 }

@@ -1,20 +1,38 @@
-//! Atomic frame files: bytes go to a temporary name in the same directory, are flushed to disk,
-//! and only then renamed to the final name, so a file with a final name is always complete.
-//! Temporary names carry the host and process id, so a later run can tell which leftovers
-//! belong to a process that is gone.
+//! Atomic frame files: bytes go to a temporary in the same directory, are flushed to disk, and
+//! only then renamed to the final name, so a file with a final name is always complete.
+//!
+//! A temporary is `.NAME.rayreel-tmp-HOST-PID-RANDOM`. It is created exclusively and never
+//! through a symbolic link (O_EXCL, O_NOFOLLOW), so nothing planted in a shared directory can
+//! redirect the write; RANDOM (64 bits) makes the name unpredictable; HOST and PID tell a later
+//! run whose leftover it is. When NAME is so long that this would pass the 255 bytes a file
+//! name may have, a hash of NAME stands in for it, so every legal frame name has a temporary
+//! (claims, `.NAME.rayreel-claim`, do the same).
 
-use std::fs;
+use super::fingerprint::Hasher;
+use super::pattern::Pattern;
+use crate::frameset::FrameSet;
+use std::collections::HashSet;
+use std::fs::{self, File, OpenOptions};
 use std::io::Write;
+use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, SystemTime};
 
-/// Marker in our temporary names; only files carrying it are ever cleaned up as ours.
+/// Marker in our temporary names.
 pub const TEMP_MARKER: &str = ".rayreel-tmp-";
+
+/// The longest file name (one path component) Linux file systems take, in bytes.
+pub const NAME_MAX: usize = 255;
+
+/// The longest a temporary's name adds to NAME: `.`, the marker, a host name of at most 64
+/// bytes, `-`, a pid of at most 10 digits, `-` and 16 hex digits.
+const TEMP_EXTRA: usize = 1 + TEMP_MARKER.len() + 64 + 1 + 10 + 1 + 16;
 
 /// Leftovers from another host are only removed once this old (its process may be alive).
 const FOREIGN_HOST_GRACE: Duration = Duration::from_secs(24 * 3600);
 
-/// This machine's name (cached), reduced to characters safe in a file name.
+/// This machine's name (cached), reduced to at most 64 characters safe in a file name.
 pub fn hostname() -> &'static str {
     static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
     HOST.get_or_init(read_hostname)
@@ -33,6 +51,7 @@ fn read_hostname() -> String {
     let clean: String = name
         .chars()
         .filter(|c| c.is_ascii_alphanumeric() || *c == '.')
+        .take(64)
         .collect();
     if clean.is_empty() {
         "host".into()
@@ -41,25 +60,60 @@ fn read_hostname() -> String {
     }
 }
 
-/// `dir/.name.rayreel-tmp-HOST-PID` for `dir/name`.
-pub fn temp_path(path: &Path) -> PathBuf {
+/// `.NAME{suffix}` beside `path`, with a hash for NAME when the name would pass NAME_MAX
+/// with a suffix of up to `extra` bytes (the leading dot included).
+pub fn sidecar(path: &Path, suffix: &str, extra: usize) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy())
         .unwrap_or_default();
-    path.with_file_name(format!(
-        ".{name}{TEMP_MARKER}{}-{}",
+    path.with_file_name(format!(".{}{suffix}", stem(&name, extra)))
+}
+
+/// NAME itself, or its hash when NAME plus `extra` bytes would not fit in a file name.
+fn stem(name: &str, extra: usize) -> String {
+    match name.len() + extra <= NAME_MAX {
+        true => name.to_string(),
+        false => Hasher::new().write(name.as_bytes()).hex(),
+    }
+}
+
+/// A fresh `.NAME.rayreel-tmp-HOST-PID-RANDOM` for `path`.
+pub fn temp_path(path: &Path) -> PathBuf {
+    let suffix = format!(
+        "{TEMP_MARKER}{}-{}-{:016x}",
         hostname(),
-        std::process::id()
-    ))
+        std::process::id(),
+        random()
+    );
+    sidecar(path, &suffix, TEMP_EXTRA)
+}
+
+/// 64 unpredictable bits from the kernel (a hash of time, pid and a counter if it fails).
+fn random() -> u64 {
+    let mut buf = [0u8; 8];
+    // SAFETY: the buffer is valid for its 8 bytes.
+    if unsafe { libc::getrandom(buf.as_mut_ptr().cast(), buf.len(), 0) } == 8 {
+        return u64::from_ne_bytes(buf);
+    }
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let now = SystemTime::now()
+        .duration_since(SystemTime::UNIX_EPOCH)
+        .unwrap_or_default();
+    let seed = format!(
+        "{now:?} {} {}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    );
+    let hex = Hasher::new().write(seed.as_bytes()).hex();
+    u64::from_str_radix(&hex[..16], 16).unwrap_or_default()
 }
 
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let tmp = temp_path(path);
+    let (tmp, mut file) = create_temp(path)?;
     let result = (|| {
-        let mut f = fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
+        file.write_all(bytes)?;
+        file.sync_all()?;
         fs::rename(&tmp, path)
     })();
     if result.is_err() {
@@ -68,34 +122,112 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     result
 }
 
-/// Removes temporary files in `dir` left by rayreel processes that no longer run (same host,
-/// dead pid) or by other hosts long ago. Returns how many were removed.
-pub fn clean_leftovers(dir: &Path) -> usize {
-    let Ok(entries) = fs::read_dir(dir) else {
+/// A new temporary for `path`, created exclusively and never through a symbolic link.
+fn create_temp(path: &Path) -> std::io::Result<(PathBuf, File)> {
+    let mut attempt = 0;
+    loop {
+        let tmp = temp_path(path);
+        // Whatever stands under the name drawn goes first (unlinking never follows a link);
+        // should something appear there again, a new name is drawn.
+        let _ = fs::remove_file(&tmp);
+        let opened = OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
+            .open(&tmp);
+        match opened {
+            Ok(file) => return Ok((tmp, file)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempt < 8 => attempt += 1,
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+/// A temporary's name split into NAME (or its hash), host and pid; `None` for any other
+/// name. Temporaries of earlier versions (`…-HOST-PID`, no random part) count too.
+fn parse_temp(file_name: &str) -> Option<(&str, &str, i32)> {
+    let (stem, owner) = file_name.strip_prefix('.')?.rsplit_once(TEMP_MARKER)?;
+    let mut parts = owner.split('-');
+    let (host, pid) = (parts.next()?, parts.next()?.parse().ok()?);
+    let random = parts.next();
+    let well_formed =
+        random.is_none_or(|r| r.len() == 16 && r.bytes().all(|b| b.is_ascii_hexdigit()));
+    (well_formed && parts.next().is_none()).then_some((stem, host, pid))
+}
+
+/// Removes the temporaries in `dir` of the frames `frames` (named by `pattern`) that processes
+/// which no longer run left behind (same host, dead pid; other hosts' after a day). Nothing
+/// else is touched, whatever its name. Returns how many were removed.
+pub fn clean_leftovers(dir: &Path, pattern: &Pattern, frames: &FrameSet) -> usize {
+    let stale = stale_temporaries(dir);
+    if stale.is_empty() {
         return 0;
+    }
+    let name = |n: u64| {
+        let path = pattern.frame_path(n);
+        path.file_name()
+            .map(|f| f.to_string_lossy().into_owned())
+            .unwrap_or_default()
     };
-    let host = hostname();
-    let mut removed = 0;
+    let hashed = frames
+        .iter()
+        .next()
+        .is_some_and(|n| name(n).len() + TEMP_EXTRA > NAME_MAX);
+    let ours: HashSet<String> = match hashed {
+        false => stale
+            .iter()
+            .filter(|(stem, _)| {
+                pattern
+                    .frame_number(stem)
+                    .is_some_and(|n| frames.contains(n))
+            })
+            .map(|(stem, _)| stem.clone())
+            .collect(),
+        // A hash cannot be read back: hash our names until every leftover is accounted for.
+        true => {
+            let mut wanted: HashSet<&str> = stale.iter().map(|(s, _)| s.as_str()).collect();
+            let mut found = HashSet::new();
+            for n in frames.iter() {
+                if wanted.is_empty() {
+                    break;
+                }
+                let h = stem(&name(n), TEMP_EXTRA);
+                if wanted.remove(h.as_str()) {
+                    found.insert(h);
+                }
+            }
+            found
+        }
+    };
+    stale
+        .iter()
+        .filter(|(stem, path)| ours.contains(stem) && fs::remove_file(path).is_ok())
+        .count()
+}
+
+/// Temporaries in `dir` whose owner is gone: (NAME or its hash, path).
+fn stale_temporaries(dir: &Path) -> Vec<(String, PathBuf)> {
+    let Ok(entries) = fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let mut stale = Vec::new();
     for entry in entries.flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        let Some((_, owner)) = name.split_once(TEMP_MARKER) else {
+        let file_name = entry.file_name();
+        let Some((stem, host, pid)) = file_name.to_str().and_then(parse_temp) else {
             continue;
         };
-        let Some((owner_host, pid)) = owner.rsplit_once('-') else {
-            continue;
-        };
-        let stale = if owner_host == host {
-            pid.parse::<i32>().is_ok_and(|pid| !alive(pid))
+        let gone = if host == hostname() {
+            !alive(pid)
         } else {
             entry.metadata().and_then(|m| m.modified()).is_ok_and(|t| {
                 SystemTime::now().duration_since(t).unwrap_or_default() > FOREIGN_HOST_GRACE
             })
         };
-        if stale && fs::remove_file(entry.path()).is_ok() {
-            removed += 1;
+        if gone {
+            stale.push((stem.to_string(), entry.path()));
         }
     }
-    removed
+    stale
 }
 
 /// Whether a process with this pid exists on this host.
@@ -104,4 +236,34 @@ pub fn alive(pid: i32) -> bool {
     pid > 0
         && (unsafe { libc::kill(pid, 0) } == 0
             || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn temporaries_fit_and_parse_back() {
+        let long = "f".repeat(250) + "_0001.png";
+        for name in ["frame_0001.png".to_string(), long.clone()] {
+            let tmp = temp_path(Path::new(&format!("dir/{name}")));
+            let file = tmp.file_name().unwrap().to_str().unwrap();
+            assert!(file.len() <= NAME_MAX, "{file}");
+            let (stem_part, host, pid) = parse_temp(file).unwrap();
+            assert_eq!((host, pid), (hostname(), std::process::id() as i32));
+            assert_eq!(stem_part, stem(&name, TEMP_EXTRA));
+        }
+        assert_ne!(temp_path(Path::new("a.png")), temp_path(Path::new("a.png")));
+        for other in [
+            "notes.rayreel-tmp-vm-3999998",
+            ".a.png.rayreel-tmp-vm-x",
+            ".a.png.rayreel-tmp-vm-1-2-3",
+        ] {
+            assert_eq!(parse_temp(other), None, "{other}");
+        }
+        assert_eq!(
+            parse_temp(".a.png.rayreel-tmp-vm-12"),
+            Some(("a.png", "vm", 12))
+        );
+    }
 }

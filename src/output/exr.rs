@@ -2,7 +2,7 @@
 //! request), an optional Z channel (eye-ray distance, +inf for background, always 32-bit), ZIP
 //! compression, and header attributes for the frame number, time, fps and fingerprint.
 
-use super::{Existing, FrameMeta, fingerprint};
+use super::{Existing, Expected, FileFormat, FrameMeta, fingerprint};
 use crate::frame::Frame;
 use exr::prelude::*;
 use std::io::Cursor;
@@ -58,7 +58,53 @@ pub fn encode(
         .write()
         .to_buffered(&mut out)
         .map_err(|e| e.to_string())?;
-    Ok(out.into_inner())
+    let mut bytes = out.into_inner();
+    sort_attributes(&mut bytes)?;
+    Ok(bytes)
+}
+
+/// The exr crate writes custom attributes in hash-map order, which differs from process to
+/// process; same inputs must give the same bytes, so the header's attributes are put in name
+/// order. The header keeps its length, so the offset table behind it stays valid.
+fn sort_attributes(bytes: &mut [u8]) -> std::result::Result<(), String> {
+    let spans = attribute_spans(bytes).ok_or("the EXR header could not be read back")?;
+    let (start, end) = match (spans.first(), spans.last()) {
+        (Some(first), Some(last)) => (first.0, last.1),
+        _ => return Ok(()),
+    };
+    let name = |s: usize| bytes[s..].split(|&b| b == 0).next().unwrap_or_default();
+    let mut sorted = spans;
+    sorted.sort_by(|a, b| name(a.0).cmp(name(b.0)));
+    let header: Vec<u8> = sorted
+        .iter()
+        .flat_map(|&(s, e)| bytes[s..e].to_vec())
+        .collect();
+    bytes[start..end].copy_from_slice(&header);
+    Ok(())
+}
+
+/// Byte ranges of the header's attributes (name, type, size, value) of a single-part file.
+fn attribute_spans(bytes: &[u8]) -> Option<Vec<(usize, usize)>> {
+    let until_nul = |from: usize| -> Option<usize> {
+        Some(from + bytes.get(from..)?.iter().position(|&b| b == 0)?)
+    };
+    let mut spans = Vec::new();
+    let mut at = 8; // magic number and version
+    loop {
+        let name_end = until_nul(at)?;
+        if name_end == at {
+            return Some(spans);
+        }
+        let type_end = until_nul(name_end + 1)?;
+        let size = bytes.get(type_end + 1..type_end + 5)?;
+        let size = i32::from_le_bytes(size.try_into().ok()?);
+        let end = type_end + 5 + usize::try_from(size).ok()?;
+        if end > bytes.len() {
+            return None;
+        }
+        spans.push((at, end));
+        at = end;
+    }
 }
 
 /// fps as a fraction, exact for whole and common NTSC-style rates.
@@ -67,8 +113,9 @@ fn rational(fps: f64) -> (i32, u32) {
     ((fps * f64::from(den)).round() as i32, den)
 }
 
-/// Reads the whole file (EXR has no checksums, so decoding every block is the check).
-pub fn inspect(bytes: &[u8]) -> Existing {
+/// Reads the whole file (EXR has no checksums, so decoding every block is the check); a file
+/// with our fingerprint must also have the job's size and colour channels.
+pub fn inspect(bytes: &[u8], expected: &Expected) -> Existing {
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -76,16 +123,47 @@ pub fn inspect(bytes: &[u8]) -> Existing {
         .first_valid_layer()
         .all_attributes()
         .from_buffered(Cursor::new(bytes));
-    match image {
-        Err(e) => Existing::Corrupt(format!("unreadable EXR: {e}")),
-        Ok(image) => match image
-            .layer_data
-            .attributes
-            .other
-            .get(&Text::from(fingerprint::KEY))
-        {
-            Some(AttributeValue::Text(t)) => Existing::Ours(t.to_string()),
-            _ => Existing::Foreign,
-        },
+    let image = match image {
+        Err(e) => return Existing::Corrupt(format!("unreadable EXR: {e}")),
+        Ok(image) => image,
+    };
+    let layer = &image.layer_data;
+    let Some(AttributeValue::Text(fingerprint)) =
+        layer.attributes.other.get(&Text::from(fingerprint::KEY))
+    else {
+        return Existing::Foreign;
+    };
+    let (w, h) = (layer.size.width(), layer.size.height());
+    if (w, h) != (expected.width as usize, expected.height as usize) {
+        return Existing::Damaged {
+            fingerprint: fingerprint.to_string(),
+            why: format!(
+                "the header says {w}x{h}; this job renders {}x{}",
+                expected.width, expected.height
+            ),
+        };
     }
+    let float = matches!(
+        expected.format,
+        FileFormat::Exr {
+            precision: Precision::Float
+        }
+    );
+    let colour = |name: &str| {
+        layer.channel_data.list.iter().any(|c| {
+            c.name == *name
+                && matches!(
+                    (&c.sample_data, float),
+                    (FlatSamples::F32(_), true) | (FlatSamples::F16(_), false)
+                )
+        })
+    };
+    if !["R", "G", "B"].into_iter().all(colour) {
+        let kind = if float { "32-bit float" } else { "half" };
+        return Existing::Damaged {
+            fingerprint: fingerprint.to_string(),
+            why: format!("no {kind} R, G and B channels"),
+        };
+    }
+    Existing::Ours(fingerprint.to_string())
 }

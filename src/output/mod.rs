@@ -44,6 +44,16 @@ impl FileFormat {
         }
     }
 
+    /// A PNG frame's bit depth, colour type (2: RGB) and channels per pixel.
+    pub fn png_layout(&self) -> (u8, u8, u64) {
+        match self {
+            FileFormat::Png {
+                sixteen_bit: true, ..
+            } => (16, 2, 3),
+            _ => (8, 2, 3),
+        }
+    }
+
     /// What decides the decoded content (compression only changes how it is packed).
     pub fn content(&self) -> String {
         match self {
@@ -91,20 +101,35 @@ pub enum Existing {
     Missing,
     /// A complete file written by rayreel, with its fingerprint.
     Ours(String),
+    /// A file with our fingerprint whose image is not what this job would write (another size
+    /// or format, missing or garbage pixels): corrupt if the fingerprint is this frame's,
+    /// stale otherwise.
+    Damaged {
+        fingerprint: String,
+        why: String,
+    },
     /// A complete image without our fingerprint: someone else's, never overwritten unforced.
     Foreign,
     /// Truncated, damaged or not an image at all.
     Corrupt(String),
 }
 
-pub fn inspect(path: &Path, format: &FileFormat) -> Existing {
+/// What a frame file of this job must be: its size and format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Expected {
+    pub width: u32,
+    pub height: u32,
+    pub format: FileFormat,
+}
+
+pub fn inspect(path: &Path, expected: &Expected) -> Existing {
     let bytes = match std::fs::read(path) {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Existing::Missing,
         Err(e) => return Existing::Corrupt(format!("unreadable: {e}")),
     };
-    match format {
-        FileFormat::Png { .. } => png::inspect(&bytes),
-        FileFormat::Exr { .. } => exr::inspect(&bytes),
+    match expected.format {
+        FileFormat::Png { .. } => png::inspect(&bytes, expected),
+        FileFormat::Exr { .. } => exr::inspect(&bytes, expected),
     }
 }

@@ -55,6 +55,21 @@ impl Pattern {
         ))
     }
 
+    /// The frame number whose file name (last path component) is `name`, if any.
+    pub fn frame_number(&self, name: &str) -> Option<u64> {
+        let head = self.prefix.rsplit('/').next().unwrap_or_default();
+        if self.digits == 0 {
+            return (name == head).then_some(0);
+        }
+        let digits = name
+            .strip_prefix(head)?
+            .strip_suffix(self.suffix.as_str())?;
+        if digits.len() != self.digits || !digits.bytes().all(|b| b.is_ascii_digit()) {
+            return None;
+        }
+        digits.parse().ok()
+    }
+
     /// The file extension, lower-cased (`png`, `exr`).
     pub fn extension(&self) -> String {
         self.frame_path(0)
@@ -78,6 +93,22 @@ mod tests {
         let p = Pattern::new("out.png", 1).unwrap();
         assert_eq!(p.frame_path(0), PathBuf::from("out.png"));
         assert_eq!(p.extension(), "png");
+    }
+
+    #[test]
+    fn file_names_give_back_their_frame_numbers() {
+        let p = Pattern::new("frames/talk/frame_####.png", 48).unwrap();
+        assert_eq!(p.frame_number("frame_0012.png"), Some(12));
+        for other in [
+            "frame_012.png",
+            "frame_00012.png",
+            "frame_0012.exr",
+            "frame_+012.png",
+        ] {
+            assert_eq!(p.frame_number(other), None, "{other}");
+        }
+        let single = Pattern::new("dir/still.png", 1).unwrap();
+        assert_eq!(single.frame_number("still.png"), Some(0));
     }
 
     #[test]

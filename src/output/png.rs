@@ -1,7 +1,7 @@
 //! PNG encoding: 8-bit (round(255 · clamp(c, 0, 1)), no gamma, as the talk) or 16-bit, with
 //! the fingerprint in a tEXt chunk ahead of the image data; and the check of an existing file.
 
-use super::{Existing, fingerprint};
+use super::{Existing, Expected, fingerprint};
 use crate::frame::Frame;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
@@ -49,19 +49,46 @@ pub fn encode(
     Ok(out)
 }
 
-/// Walks the chunks of a PNG file and checks every CRC (no decompression, so checking a
-/// directory of frames is fast): intact with our fingerprint, intact without, or damaged.
-pub fn inspect(bytes: &[u8]) -> Existing {
-    const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
-    let Some(mut rest) = bytes.strip_prefix(SIGNATURE) else {
-        return Existing::Corrupt("not a PNG file".into());
+/// Walks the chunks of a PNG file checking every CRC: intact without our fingerprint
+/// (foreign), or corrupt. A file with our fingerprint must also have the job's header (size,
+/// bit depth, colour type, no interlace) and image data that inflates to exactly the bytes
+/// that header needs, or it is damaged: valid checksums around missing or garbage pixels do
+/// not make a frame done.
+pub fn inspect(bytes: &[u8], expected: &Expected) -> Existing {
+    let chunks = match walk(bytes) {
+        Ok(chunks) => chunks,
+        Err(why) => return Existing::Corrupt(why),
     };
-    let mut fingerprint = None;
+    let Some(fingerprint) = chunks.fingerprint else {
+        return Existing::Foreign;
+    };
+    match check_header(chunks.header, expected).and_then(|rows| check_data(&chunks.data, rows)) {
+        Ok(()) => Existing::Ours(fingerprint),
+        Err(why) => Existing::Damaged { fingerprint, why },
+    }
+}
+
+/// What the chunk walk found.
+struct Chunks<'a> {
+    header: &'a [u8],
+    fingerprint: Option<String>,
+    /// The IDAT chunks' contents, in order: one zlib stream.
+    data: Vec<&'a [u8]>,
+}
+
+fn walk(bytes: &[u8]) -> Result<Chunks<'_>, String> {
+    const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+    let mut rest = bytes.strip_prefix(SIGNATURE).ok_or("not a PNG file")?;
+    let mut found = Chunks {
+        header: &[],
+        fingerprint: None,
+        data: Vec::new(),
+    };
     let mut first = true;
     while rest.len() >= 12 {
         let len = u32::from_be_bytes(rest[..4].try_into().expect("4 bytes")) as usize;
         if rest.len() < 12 + len {
-            return Existing::Corrupt("truncated".into());
+            return Err("truncated".into());
         }
         let (kind, data) = (&rest[4..8], &rest[8..8 + len]);
         let crc = u32::from_be_bytes(rest[8 + len..12 + len].try_into().expect("4 bytes"));
@@ -69,29 +96,124 @@ pub fn inspect(bytes: &[u8]) -> Existing {
         h.update(kind);
         h.update(data);
         if h.finalize() != crc {
-            return Existing::Corrupt(format!(
+            return Err(format!(
                 "bad checksum in a {} chunk",
                 String::from_utf8_lossy(kind)
             ));
         }
         if first && kind != b"IHDR" {
-            return Existing::Corrupt("no PNG header".into());
+            return Err("no PNG header".into());
+        }
+        match kind {
+            b"IHDR" if first => found.header = data,
+            b"IDAT" => found.data.push(data),
+            b"IEND" => return Ok(found),
+            b"tEXt" => {
+                if let Some(value) = data
+                    .strip_prefix(fingerprint::KEY.as_bytes())
+                    .and_then(|v| v.strip_prefix(b"\0"))
+                {
+                    found.fingerprint = Some(String::from_utf8_lossy(value).into_owned());
+                }
+            }
+            _ => {}
         }
         first = false;
-        if kind == b"tEXt"
-            && let Some(value) = data
-                .strip_prefix(fingerprint::KEY.as_bytes())
-                .and_then(|v| v.strip_prefix(b"\0"))
-        {
-            fingerprint = Some(String::from_utf8_lossy(value).into_owned());
-        }
-        if kind == b"IEND" {
-            return match fingerprint {
-                Some(f) => Existing::Ours(f),
-                None => Existing::Foreign,
-            };
-        }
         rest = &rest[12 + len..];
     }
-    Existing::Corrupt("truncated".into())
+    Err("truncated".into())
+}
+
+/// The header against the job; returns the length of one filtered row and the row count.
+fn check_header(header: &[u8], expected: &Expected) -> Result<(u64, u64), String> {
+    let [
+        w0,
+        w1,
+        w2,
+        w3,
+        h0,
+        h1,
+        h2,
+        h3,
+        depth,
+        color,
+        _,
+        _,
+        interlace,
+    ] = *header
+    else {
+        return Err(format!("a PNG header of {} bytes", header.len()));
+    };
+    let (w, h) = (
+        u32::from_be_bytes([w0, w1, w2, w3]),
+        u32::from_be_bytes([h0, h1, h2, h3]),
+    );
+    let (want_depth, want_color, channels) = expected.format.png_layout();
+    if (w, h) != (expected.width, expected.height) {
+        return Err(format!(
+            "the header says {w}x{h}; this job renders {}x{}",
+            expected.width, expected.height
+        ));
+    }
+    if (depth, color) != (want_depth, want_color) {
+        return Err(format!(
+            "the header says {depth}-bit {}; this job writes {want_depth}-bit {}",
+            color_name(color),
+            color_name(want_color)
+        ));
+    }
+    if interlace != 0 {
+        return Err("the image is interlaced; rayreel never writes that".into());
+    }
+    let row = 1 + u64::from(w) * channels * u64::from(depth / 8);
+    Ok((row, u64::from(h)))
+}
+
+fn color_name(color: u8) -> &'static str {
+    match color {
+        0 => "grey",
+        2 => "RGB",
+        3 => "palette",
+        4 => "grey+alpha",
+        6 => "RGBA",
+        _ => "unknown colour type",
+    }
+}
+
+/// The zlib stream of the IDAT chunks inflates, with a valid checksum, to exactly
+/// `rows` rows of `row` bytes (a filter byte and the pixels). Inflated through a small
+/// window, so checking a huge frame takes no memory to speak of.
+fn check_data(data: &[&[u8]], (row, rows): (u64, u64)) -> Result<(), String> {
+    const WINDOW: usize = 32 << 10;
+    let want = row * rows;
+    let stream: Vec<u8> = data.concat();
+    let mut input = stream.as_slice();
+    let mut inflater = fdeflate::Decompressor::new();
+    let mut out = vec![0u8; 4 * WINDOW];
+    let (mut at, mut total) = (0usize, 0u64);
+    while !inflater.is_done() {
+        let (used, made) = inflater
+            .read(input, &mut out, at, true)
+            .map_err(|e| format!("the image data does not inflate: {e:?}"))?;
+        (input, at, total) = (&input[used..], at + made, total + made as u64);
+        if total > want {
+            return Err(format!(
+                "the image data holds more than the {want} bytes it should"
+            ));
+        }
+        if used == 0 && made == 0 && !inflater.is_done() {
+            return Err(format!(
+                "the image data stops after {total} of {want} bytes"
+            ));
+        }
+        if at > out.len() - WINDOW {
+            // Keep the last 32 KiB, all that deflate may refer back to.
+            out.copy_within(at - WINDOW..at, 0);
+            at = WINDOW;
+        }
+    }
+    if total != want {
+        return Err(format!("the image data holds {total} of {want} bytes"));
+    }
+    Ok(())
 }

@@ -14,7 +14,7 @@ pub use guard::nesting_depth;
 
 use crate::camera::{Camera, Degenerate, Pose};
 use crate::exposure::Shutter;
-use crate::output::pattern::Pattern;
+use crate::output::{atomic, pattern::Pattern};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
 use crate::timeline::{Ease, Key, Timeline};
 use crate::tracer::{Adaptive, Sampler, Settings};
@@ -188,6 +188,9 @@ pub fn parse_drawable(
     text: &str,
     overrides: &Overrides,
 ) -> Result<(Sequence, Option<LoadError>), LoadError> {
+    // Editors on Windows start UTF-8 files with a byte-order mark; libyaml would take it for
+    // the start of a second document.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     if text.len() as u64 > MAX_FILE_BYTES {
         return Err(too_large(file, text.len() as u64));
     }
@@ -239,7 +242,9 @@ fn yaml_error(file: &Path, e: &serde_yaml::Error) -> LoadError {
         "repetition limit exceeded" => {
             "aliases repeat too many nodes (repetition limit exceeded)".into()
         }
-        _ => out_of_range(&message).unwrap_or(message),
+        _ => out_of_range(&message)
+            .or_else(|| tagged_number(&message))
+            .unwrap_or(message),
     };
     LoadError::Invalid {
         file: file.to_owned(),
@@ -274,6 +279,29 @@ fn out_of_range(message: &str) -> Option<String> {
         .flat_map(|t| ["u64", "i64"].map(|e| format!("` as {t}, expected {e}")))
         .find_map(|suffix| s.strip_suffix(suffix.as_str()))?;
     Some(format!("{field}number out of range (got {s})"))
+}
+
+/// serde_yaml reads a tagged, quoted number (`fps: !!float "24"`) as a number and then refuses
+/// it for the very type it is (`invalid type: floating point `24.0`, expected f64`): say what
+/// to write instead.
+fn tagged_number(message: &str) -> Option<String> {
+    let (field, rest) = message.split_once(": invalid type: ")?;
+    let value = match rest.strip_prefix("floating point `") {
+        Some(r) => r.strip_suffix("`, expected f64")?,
+        None => {
+            let (value, expected) = rest.strip_prefix("integer `")?.split_once("`, expected ")?;
+            ["f64", "u64", "i64"].contains(&expected).then_some(value)?
+        }
+    };
+    let value = value.parse::<f64>().map_or(value.to_string(), num);
+    // `timeline.fps` → `fps: 24`; a list element (`center[1]`) → `0`.
+    let plain = match field.ends_with(']') {
+        true => value.clone(),
+        false => format!("{}: {value}", field.rsplit('.').next().unwrap_or(field)),
+    };
+    Some(format!(
+        "{field}: a tagged, quoted number such as `!!float \"{value}\"` is not read as a number; write it plainly, without tag or quotes: `{plain}`"
+    ))
 }
 
 /// Longest error message shown whole; longer ones quote some huge value from the file.
@@ -331,15 +359,55 @@ fn apply(seq: &mut Sequence, o: &Overrides) -> Result<(), LoadError> {
     Ok(())
 }
 
-/// A pattern that names frames of a type rayreel writes.
+/// Longest path the kernel takes, in bytes (PATH_MAX less its NUL).
+const MAX_PATH_BYTES: usize = 4095;
+
+/// A pattern that names frames of a type rayreel writes, in paths the file system can take.
 fn output_pattern(output: &str, frame_count: u64) -> Result<Pattern, String> {
+    if output.contains('\0') {
+        return Err(format!(
+            "contains a NUL byte, which no file name may hold (got `{}`)",
+            output.replace('\0', "\\0")
+        ));
+    }
     let pattern = Pattern::new(output, frame_count)?;
+    // Every frame's path is as long as the last one's (the numbers are padded to one width).
+    let last = pattern.frame_path(frame_count.saturating_sub(1));
+    for part in last.iter() {
+        let part = part.to_string_lossy();
+        if part.len() > atomic::NAME_MAX {
+            return Err(format!(
+                "the name `{}` is {} bytes; a file or directory name may have at most {}",
+                abbreviated(&part),
+                part.len(),
+                atomic::NAME_MAX
+            ));
+        }
+    }
+    if last.as_os_str().len() > MAX_PATH_BYTES {
+        return Err(format!(
+            "a frame's path is {} bytes (`{}`); a path may have at most {MAX_PATH_BYTES}",
+            last.as_os_str().len(),
+            abbreviated(&last.to_string_lossy())
+        ));
+    }
     match pattern.extension().as_str() {
         "png" | "exr" => Ok(pattern),
         other => Err(format!(
             "unsupported file type `.{other}`; frames are .png or .exr (got `{output}`)"
         )),
     }
+}
+
+/// `s` cut in the middle when long: `aaaaaaaaaaaaaaaaaaaa…aaaaaaaa_0001.png`.
+fn abbreviated(s: &str) -> String {
+    let chars: Vec<char> = s.chars().collect();
+    if chars.len() <= 48 {
+        return s.to_string();
+    }
+    let head: String = chars[..24].iter().collect();
+    let tail: String = chars[chars.len() - 20..].iter().collect();
+    format!("{head}…{tail}")
 }
 
 /// A sequence file may come from someone else, so its `output` stays below the current
@@ -357,7 +425,36 @@ fn contained(path: &str, output: &str) -> Check<()> {
             ),
         );
     }
+    if let Some(dir) = escapes(output) {
+        return invalid(
+            path,
+            format!(
+                "`{output}` leads outside the current directory: its directory is {} once symbolic links are followed; a sequence file may only write below the current directory (if you mean it, give it on the command line with --output)",
+                dir.display()
+            ),
+        );
+    }
     Ok(())
+}
+
+/// Where the directory of a relative `output` really is when it is not below the current
+/// directory (a symbolic link on the way leads elsewhere, or leads nowhere); `None` when it is
+/// inside. The part that does not exist yet will be created as plain directories.
+pub fn escapes(output: &str) -> Option<PathBuf> {
+    let cwd = std::fs::canonicalize(".").ok()?;
+    let mut existing = Path::new(output).parent().unwrap_or(Path::new(""));
+    let mut missing = Vec::new();
+    while !existing.as_os_str().is_empty() && std::fs::symlink_metadata(existing).is_err() {
+        missing.push(existing.file_name()?);
+        existing = existing.parent().unwrap_or(Path::new(""));
+    }
+    let base = match existing.as_os_str().is_empty() {
+        true => cwd.clone(),
+        // An entry that exists but does not resolve is a link that leads nowhere.
+        false => std::fs::canonicalize(existing).unwrap_or_else(|_| existing.to_path_buf()),
+    };
+    let dir = missing.iter().rev().fold(base, |d, part| d.join(part));
+    (!dir.starts_with(&cwd)).then_some(dir)
 }
 
 fn pixels(w: u32, h: u32) -> Result<(), String> {
@@ -575,14 +672,45 @@ fn got(v: impl Display) -> String {
     format!("(got {v})")
 }
 
-/// `(got X)` for a number, in exponent form when plain digits would run long.
-fn got_num(v: f64) -> String {
-    let a = v.abs();
-    if a == 0.0 || (1e-4..1e16).contains(&a) || !v.is_finite() {
-        got(v)
-    } else {
-        got(format!("{v:e}"))
+/// `(got X)` for a number, short (see `num`).
+pub(super) fn got_num(v: f64) -> String {
+    got(num(v))
+}
+
+/// A number as messages show it: exactly as written when that takes at most 6 significant
+/// digits (`0.35`, `10000000`), otherwise rounded to 6, plain from 1e-4 up to 1e6 and in
+/// exponent form beyond (`1e-300`, never 300 digits).
+pub fn num(v: f64) -> String {
+    let exact = format!("{v}");
+    let significant = exact
+        .trim_start_matches('-')
+        .replace('.', "")
+        .trim_matches('0')
+        .len();
+    if v == 0.0 || !v.is_finite() || ((1e-4..1e16).contains(&v.abs()) && significant <= 6) {
+        return exact;
     }
+    let exponent = v.abs().log10().floor() as i32;
+    if (-4..6).contains(&exponent) {
+        let decimals = (5 - exponent).max(0) as usize;
+        return trim_zeros(&format!("{v:.decimals$}")).to_string();
+    }
+    let text = format!("{v:.5e}");
+    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+    format!("{}e{exponent}", trim_zeros(mantissa))
+}
+
+/// `1.500` → `1.5`, `2.000` → `2`; whole numbers without a point stay as they are.
+fn trim_zeros(s: &str) -> &str {
+    match s.contains('.') {
+        true => s.trim_end_matches('0').trim_end_matches('.'),
+        false => s,
+    }
+}
+
+/// `[x, y, z]` with each number short (see `num`).
+fn num3(v: DVec3) -> String {
+    format!("[{}, {}, {}]", num(v.x), num(v.y), num(v.z))
 }
 
 fn number(path: &str, v: f64) -> Check<f64> {
@@ -609,7 +737,7 @@ fn vector(path: &str, v: raw::V3) -> Check<DVec3> {
 }
 
 fn fmt3(v: raw::V3) -> String {
-    format!("[{}, {}, {}]", v[0], v[1], v[2])
+    num3(DVec3::from(v))
 }
 
 fn unit(path: &str, v: raw::V3) -> Check<DVec3> {
@@ -855,7 +983,11 @@ fn spot(path: &str, s: &raw::SpotLight) -> Check<Light> {
     if inner > outer {
         return invalid(
             format!("{path}.inner_angle"),
-            format!("must not exceed outer_angle ({outer}) {}", got(inner)),
+            format!(
+                "must not exceed outer_angle ({}) {}",
+                num(outer),
+                got_num(inner)
+            ),
         );
     }
     Ok(Light::Spot {
@@ -919,7 +1051,9 @@ fn check_pose(path: &str, pose: &Pose) -> Check<()> {
             format!("{path}.{field}"),
             format!(
                 "{e} (position {}, look_at {}, up {})",
-                pose.position, pose.look_at, pose.up
+                num3(pose.position),
+                num3(pose.look_at),
+                num3(pose.up)
             ),
         )
     })

@@ -3,7 +3,7 @@
 
 use super::{
     Check, Invalid, MAX_FPS, MAX_FRAMES, MAX_ROLL_PER_FRAME_DEGREES, aperture, focus_distance, fov,
-    got, in_range, invalid, number, positive, raw, unit, vector,
+    got, got_num, in_range, invalid, num, number, positive, raw, unit, vector,
 };
 use crate::camera::{Camera, Degenerate, Pose};
 use crate::exposure::{INSTANTS, Shutter};
@@ -35,7 +35,7 @@ pub(super) fn timeline(
     if fps == 0.0 {
         return invalid(
             "timeline.fps",
-            format!("must be greater than 0 {}", got(fps)),
+            format!("must be greater than 0 {}", got_num(fps)),
         );
     }
     let path = path(t, camera)?;
@@ -87,13 +87,20 @@ fn frame_count(t: &raw::Timeline, path: &TimelinePath, fps: f64) -> Check<u64> {
         return Ok(frames as u64);
     }
     let how = match (t.duration, path) {
-        (Some(d), _) => format!("{d} s × {fps} fps = {frames} frames"),
+        (Some(d), _) => format!("{} s × {} fps = {} frames", num(d), num(fps), num(frames)),
         (None, TimelinePath::Keys(k)) => format!(
-            "ending on the last keyframe at {} s at {fps} fps takes {frames} frames",
-            k.keys.last().expect("non-empty").time
+            "ending on the last keyframe at {} s at {} fps takes {} frames",
+            num(k.keys.last().expect("non-empty").time),
+            num(fps),
+            num(frames)
         ),
         (None, TimelinePath::Orbit(o)) => {
-            format!("{} s × {fps} fps = {frames} frames", o.duration)
+            format!(
+                "{} s × {} fps = {} frames",
+                num(o.duration),
+                num(fps),
+                num(frames)
+            )
         }
     };
     invalid(
@@ -194,8 +201,8 @@ fn keyframes(keys: &[raw::Keyframe], camera: Option<Key>) -> Check<Vec<Key>> {
                 format!(
                     "keyframe times must increase strictly; keyframe {} is at {} {}",
                     i - 1,
-                    prev.time,
-                    got(time)
+                    num(prev.time),
+                    got_num(time)
                 ),
             );
         }

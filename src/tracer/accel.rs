@@ -253,7 +253,11 @@ impl Geometry {
         let slabs = Slabs::new(rays, search.lanes());
         // Children are ordered by the first searching lane's direction (a heuristic only).
         let lead = search.lanes().bits().trailing_zeros() as usize;
-        let backwards = [rays.dir.x, rays.dir.y, rays.dir.z].map(|d| d.lane(lead) < 0.0);
+        let backwards = [
+            rays.dir.x.lane(lead) < 0.0,
+            rays.dir.y.lane(lead) < 0.0,
+            rays.dir.z.lane(lead) < 0.0,
+        ];
         let mut stack = [0u32; 64];
         let mut top = 1;
         while top > 0 && search.lanes().any() {
@@ -400,21 +404,10 @@ impl<V: Lanes> Slabs<V> {
             z: inverse(rays.dir.z),
         };
         let zero = V::splat(0.0);
-        let uniform = |negative: V::M, positive: V::M| {
-            let (neg, pos) = (negative.and(lanes).bits(), positive.and(lanes).bits());
-            let all = lanes.bits();
-            if neg == all {
-                Some(true)
-            } else if pos == all {
-                Some(false)
-            } else {
-                None
-            }
-        };
         let backwards = [
-            uniform(inv.x.lt(zero), zero.lt(inv.x)),
-            uniform(inv.y.lt(zero), zero.lt(inv.y)),
-            uniform(inv.z.lt(zero), zero.lt(inv.z)),
+            uniform(inv.x.lt(zero), zero.lt(inv.x), lanes),
+            uniform(inv.y.lt(zero), zero.lt(inv.y), lanes),
+            uniform(inv.z.lt(zero), zero.lt(inv.z), lanes),
         ];
         Slabs {
             origin: rays.origin,
@@ -450,6 +443,20 @@ impl<V: Lanes> Slabs<V> {
         let near = x0.max(y0).max(z0).max(V::splat(0.0));
         let far = x1.min(y1).min(z1).min(limit);
         near.le(far)
+    }
+}
+
+/// Some(true) when every lane of `lanes` is `negative`, Some(false) when every one is
+/// `positive`, None otherwise.
+#[inline(always)]
+fn uniform<M: Mask>(negative: M, positive: M, lanes: M) -> Option<bool> {
+    let all = lanes.bits();
+    if negative.and(lanes).bits() == all {
+        Some(true)
+    } else if positive.and(lanes).bits() == all {
+        Some(false)
+    } else {
+        None
     }
 }
 

@@ -19,6 +19,7 @@ use crate::scene::Scene;
 pub use kernel::Kernel;
 use rayon::prelude::*;
 use rows::{Pass, RowOut, RowStats};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What decides a frame besides the scene and the camera.
 #[derive(Clone, Copy, PartialEq)]
@@ -91,6 +92,18 @@ pub fn render(world: &World, exposure: &Exposure, settings: &Settings, frame: u6
     render_with(Kernel::chosen(), world, exposure, settings, frame)
 }
 
+/// `render`, given up (`None`) as soon as `stop` is set: it is checked before each band of
+/// rows, each packet and each sample, so even a frame of hours stops within milliseconds.
+pub fn render_or_stop(
+    world: &World,
+    exposure: &Exposure,
+    settings: &Settings,
+    frame: u64,
+    stop: &AtomicBool,
+) -> Option<Frame> {
+    render_frame(Kernel::chosen(), world, exposure, settings, frame, stop)
+}
+
 /// `render` with a given kernel (they all give the same frame; benchmarks compare them).
 pub fn render_with(
     kernel: Kernel,
@@ -99,6 +112,18 @@ pub fn render_with(
     settings: &Settings,
     frame: u64,
 ) -> Frame {
+    let never = AtomicBool::new(false);
+    render_frame(kernel, world, exposure, settings, frame, &never).expect("never stopped")
+}
+
+fn render_frame(
+    kernel: Kernel,
+    world: &World,
+    exposure: &Exposure,
+    settings: &Settings,
+    frame: u64,
+    stop: &AtomicBool,
+) -> Option<Frame> {
     let (w, h) = (settings.width as usize, settings.height as usize);
     let mut rgb = crate::frame::buffer(3 * w * h);
     let mut spread = vec![
@@ -119,6 +144,7 @@ pub fn render_with(
         frame,
         samples: Samples::All(settings.samples),
         from_origin: &from_origin,
+        stop,
     };
     let mut stats = run_pass(kernel, &first, &mut rgb, &mut spread);
     if let Some(a) = settings.adaptive {
@@ -140,7 +166,10 @@ pub fn render_with(
             .for_each(|(row, out)| kernel.depth_row(&first, row as u32, out));
         depth
     });
-    Frame {
+    if stop.load(Ordering::Relaxed) {
+        return None;
+    }
+    Some(Frame {
         width: settings.width,
         height: settings.height,
         rgb,
@@ -148,7 +177,7 @@ pub fn render_with(
         non_finite: stats.non_finite,
         samples: stats.samples,
         rays: stats.rays,
-    }
+    })
 }
 
 /// Which samples a pass traces for each selected pixel.

@@ -14,6 +14,7 @@ use super::{Sampler, Samples, Settings, World, finite};
 use crate::camera::{Camera, screen_points};
 use crate::exposure::{Exposure, INSTANTS};
 use glam::DVec3;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Everything one pass over a frame needs, shared by its packets.
 pub(super) struct Pass<'a> {
@@ -28,6 +29,14 @@ pub(super) struct Pass<'a> {
     pub samples: Samples,
     /// `Geometry::from_origin` of the camera position.
     pub from_origin: &'a [FromOrigin],
+    /// Set when the frame is no longer wanted: packets and samples not yet begun are skipped.
+    pub stop: &'a AtomicBool,
+}
+
+impl Pass<'_> {
+    fn stopped(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
 }
 
 /// One row's slice of the frame: 3 floats per pixel, and each pixel's sample spread (the
@@ -113,6 +122,9 @@ pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
     let tile_w = (V::N / tile_rows(V::N)) as u32;
     let mut stats = RowStats::default();
     for left in (0..w).step_by(tile_w as usize) {
+        if pass.stopped() {
+            break;
+        }
         let pixels = Pixels::new(|k| {
             let (r, c) = (k as u32 / tile_w, left + k as u32 % tile_w);
             (k < V::N && r < rows && c < w).then_some((top + r, c))
@@ -141,6 +153,9 @@ pub(super) fn marked<V: Lanes>(
     let w = pass.settings.width;
     let mut stats = RowStats::default();
     for (pixels, out) in marked.chunks(V::N).zip(out.chunks_mut(V::N)) {
+        if pass.stopped() {
+            break;
+        }
         let packet_pixels = Pixels::new(|k| pixels.get(k).map(|&p| (p / w, p % w)));
         let old: [[f32; 3]; 16] = std::array::from_fn(|k| {
             let i = 3 * pixels[k.min(pixels.len() - 1)] as usize;
@@ -194,7 +209,7 @@ fn packet<V: Lanes>(
             Dims::new(pattern, pass.frame, pixel)
         })
     });
-    for k in first..end {
+    for k in (first..end).take_while(|_| !pass.stopped()) {
         let (u, v) = offsets::<V>(pattern, &seeds, k);
         let eye = match (pass.exposure, &dims) {
             (Some(exposure), Some(dims)) => Eye {

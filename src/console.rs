@@ -1,0 +1,47 @@
+//! Text for people: stdout where a reader that has gone is a normal end, and strings from
+//! files and command lines made safe to show on a terminal.
+
+use std::borrow::Cow;
+use std::io::{ErrorKind, Write};
+
+/// Writes `text` to stdout. A reader that has gone (`rayreel status FILE | head -1`) ends the
+/// output normally, as in ripgrep; any other failure is an error.
+pub fn print(text: &str) -> Result<(), String> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != ErrorKind::BrokenPipe => Err(format!("stdout: cannot write: {e}")),
+        _ => Ok(()),
+    }
+}
+
+/// `s` with control characters, and the bidirectional overrides that reorder what a terminal
+/// shows, written as escapes (`\u{1b}`, `\n`): a name from a sequence file cannot move the
+/// cursor, recolour the terminal or forge a line of output.
+pub fn printable(s: &str) -> Cow<'_, str> {
+    if !s.chars().any(hostile) {
+        return Cow::Borrowed(s);
+    }
+    let mut out = String::with_capacity(s.len() + 8);
+    for c in s.chars() {
+        match hostile(c) {
+            true => out.extend(c.escape_debug()),
+            false => out.push(c),
+        }
+    }
+    Cow::Owned(out)
+}
+
+fn hostile(c: char) -> bool {
+    c.is_control() || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn control_characters_are_escaped() {
+        assert_eq!(printable("frames/a.png"), "frames/a.png");
+        assert_eq!(printable("é\u{1b}[2J\n\u{202e}"), "é\\u{1b}[2J\\n\\u{202e}");
+    }
+}
