@@ -5,9 +5,12 @@
 
 mod common;
 use common::*;
-use rayreel::exposure::{Exposure, INSTANTS};
+use glam::DVec3;
+use rayreel::camera::{Degenerate, Pose};
+use rayreel::exposure::{Exposure, INSTANTS, Shutter};
 use rayreel::frame::Frame;
 use rayreel::sequence::{self, Overrides, Sequence};
+use rayreel::timeline::{Ease, Interpolation, Key, Keyed, Path as TimelinePath, Speed, Timeline};
 use rayreel::tracer::{self, Adaptive, Kernel, Settings, World};
 use std::path::Path;
 
@@ -41,7 +44,10 @@ fn render_pngs(name: &str, yaml: &str, args: &[&str]) -> std::path::PathBuf {
 
 /// Pixels of every frame in `dir`, in frame order.
 fn pixels(dir: &Path) -> Vec<Vec<u8>> {
-    files(dir).iter().map(|f| read_png(&dir.join(f)).2).collect()
+    files(dir)
+        .iter()
+        .map(|f| read_png(&dir.join(f)).2)
+        .collect()
 }
 
 #[test]
@@ -58,7 +64,11 @@ fn a_closed_shutter_or_a_still_camera_gives_the_bytes_of_no_blur() {
         "a 180° shutter left a moving frame unblurred"
     );
     // A still camera: one key, and a keyframed film that holds still for its first frames.
-    let still = sequence(96, 54, "camera: { position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }\n");
+    let still = sequence(
+        96,
+        54,
+        "camera: { position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }\n",
+    );
     for samples in ["1", "4", "5"] {
         let args = ["--samples", samples];
         let sharp = pixels(&render_pngs("still-none", &still, &args));
@@ -99,7 +109,10 @@ fn per_sample_cameras_that_all_equal_the_frames_trace_the_pinhole_rays() {
                 frame(&seq, kernel, &copies, &s),
             );
             assert!(
-                a.rgb.iter().zip(&b.rgb).all(|(x, y)| x.to_bits() == y.to_bits()),
+                a.rgb
+                    .iter()
+                    .zip(&b.rgb)
+                    .all(|(x, y)| x.to_bits() == y.to_bits()),
                 "{} {samples} spp: per-sample cameras changed the frame",
                 kernel.name()
             );
@@ -113,12 +126,18 @@ fn an_aperture_of_0_gives_todays_bytes() {
     // lens, a focus distance and a shutter on its still camera.
     let talk = std::fs::read_to_string(repo().join("sequences/talk.yaml")).unwrap();
     let lensed = talk
-        .replace("  fov: 90\n", "  fov: 90\n  aperture: 0\n  focus_distance: 0.3\n")
+        .replace(
+            "  fov: 90\n",
+            "  fov: 90\n  aperture: 0\n  focus_distance: 0.3\n",
+        )
         .replace("render:\n", "render:\n  shutter: 180\n");
     assert!(lensed.contains("aperture: 0") && lensed.contains("shutter: 180"));
     let out = render_pngs("aperture-0", &lensed, &["--size", "160x90"]);
     let (_, _, reference) = read_png(&repo().join("tests/reference/talk_160x90.png"));
-    assert!(pixels(&out)[0] == reference, "differs from the talk reference");
+    assert!(
+        pixels(&out)[0] == reference,
+        "differs from the talk reference"
+    );
     // A keyframed aperture that stays 0 on a moving camera.
     let moving = panning("");
     let keyed = moving.replace("fov: 60 }", "fov: 60, aperture: 0, focus_distance: 1 }");
@@ -174,13 +193,18 @@ fn a_blurred_frame_converges_to_the_mean_of_the_instants_across_its_interval() {
         &tracer::render(&world, &Exposure::still(exposure.camera), &sharp, n).rgb,
         &mean,
     );
-    eprintln!("PSNR against the mean of the instants: {quality:?} (unblurred at 16 spp: {unblurred:.1})");
+    eprintln!(
+        "PSNR against the mean of the instants: {quality:?} (unblurred at 16 spp: {unblurred:.1})"
+    );
     assert!(
         quality.windows(2).all(|w| w[1] > w[0] + 1.0),
         "PSNR must rise with samples: {quality:?}"
     );
     assert!(quality[4] > 40.0, "{quality:?}");
-    assert!(unblurred + 10.0 < quality[4], "the blur is too slight to test: {unblurred}");
+    assert!(
+        unblurred + 10.0 < quality[4],
+        "the blur is too slight to test: {unblurred}"
+    );
 }
 
 /// Where along `row` the values cross `level` going from `from` towards `to` (linear
@@ -218,7 +242,9 @@ lights:
     };
     let row = |yaml: &str| {
         let f = rayreel::schedule::render_frame(&parse(yaml), 0).unwrap();
-        (0..240).map(|c| f64::from(f.pixel(59, c)[0])).collect::<Vec<f64>>()
+        (0..240)
+            .map(|c| f64::from(f.pixel(59, c)[0]))
+            .collect::<Vec<f64>>()
     };
     let pinhole = row(&scene(""));
     let (aperture, focus) = (0.2, 2.0);
@@ -287,11 +313,21 @@ fn focus_distances_interpolate_and_print_as_the_frames_render_them() {
     assert_eq!(rows.len(), 13);
     for r in &rows {
         let want = 1.0 + 2.0 * r[1];
-        assert!((r[13] - want).abs() < 1e-12, "t = {}: focus {}", r[1], r[13]);
+        assert!(
+            (r[13] - want).abs() < 1e-12,
+            "t = {}: focus {}",
+            r[1],
+            r[13]
+        );
     }
     // Without focus distances the focus follows look_at; a key before the first focus
     // distance focuses on its own look_at.
-    let auto = camera_rows(&dir, &yaml.replace(", focus_distance: 1", "").replace(", focus_distance: 3", ""));
+    let auto = camera_rows(
+        &dir,
+        &yaml
+            .replace(", focus_distance: 1", "")
+            .replace(", focus_distance: 3", ""),
+    );
     for r in &auto {
         let d = ((r[2] - r[5]).powi(2) + (r[3] - r[6]).powi(2) + (r[4] - r[7]).powi(2)).sqrt();
         assert!((r[13] - d).abs() <= 1e-12 * d, "{r:?}");
@@ -302,7 +338,18 @@ fn focus_distances_interpolate_and_print_as_the_frames_render_them() {
     // Frame n renders as a still camera given its printed pose, the aperture and the printed
     // focus distance, traced as frame n (the lens points are drawn per frame).
     std::fs::write(dir.join("seq.yaml"), &yaml).unwrap();
-    let out = run_in(&dir, &["render", "seq.yaml", "--samples", "4", "-o", "anim/f_##.png", "-q"]);
+    let out = run_in(
+        &dir,
+        &[
+            "render",
+            "seq.yaml",
+            "--samples",
+            "4",
+            "-o",
+            "anim/f_##.png",
+            "-q",
+        ],
+    );
     assert!(out.status.success(), "{}", stderr(&out));
     for n in [0usize, 5, 12] {
         let r = &rows[n];
@@ -332,7 +379,10 @@ fn fingerprints_follow_the_lens_and_the_open_interval() {
     let dir = scratch("film-fingerprints");
     let plan = |yaml: &str| {
         std::fs::write(dir.join("seq.yaml"), yaml).unwrap();
-        let out = run_in(&dir, &["render", "seq.yaml", "-o", "out/f_##.png", "--dry-run"]);
+        let out = run_in(
+            &dir,
+            &["render", "seq.yaml", "-o", "out/f_##.png", "--dry-run"],
+        );
         assert!(out.status.success(), "{}", stderr(&out));
         String::from_utf8(out.stdout).unwrap()
     };
@@ -342,11 +392,25 @@ fn fingerprints_follow_the_lens_and_the_open_interval() {
     // Writing out the defaults changes no frame.
     let explicit = plain
         .replace("render: {", "render: { shutter: 0, shutter_offset: 0.25,")
-        .replace("look_at: [-0.1, -0.1, -0.6] }", "look_at: [-0.1, -0.1, -0.6], aperture: 0 }");
-    assert!(plan(&explicit).contains("49 frames: 49 up to date"), "{}", plan(&explicit));
+        .replace(
+            "look_at: [-0.1, -0.1, -0.6] }",
+            "look_at: [-0.1, -0.1, -0.6], aperture: 0 }",
+        );
+    assert!(
+        plan(&explicit).contains("49 frames: 49 up to date"),
+        "{}",
+        plan(&explicit)
+    );
     // Opening the lens changes every frame.
-    let lens = plain.replace("look_at: [-0.1, -0.1, -0.6] }", "look_at: [-0.1, -0.1, -0.6], aperture: 0.05 }");
-    assert!(plan(&lens).contains("49 frames: 49 stale"), "{}", plan(&lens));
+    let lens = plain.replace(
+        "look_at: [-0.1, -0.1, -0.6] }",
+        "look_at: [-0.1, -0.1, -0.6], aperture: 0.05 }",
+    );
+    assert!(
+        plan(&lens).contains("49 frames: 49 stale"),
+        "{}",
+        plan(&lens)
+    );
     // With a shutter, moving the last key also changes frame 24, which sits on the middle key
     // but whose open interval reaches past it; without one, only frames 25-48 change.
     let moved = |yaml: &str| yaml.replace("position: [0, 0.5, -2.5]", "position: [0.2, 0.5, -2.5]");
@@ -357,32 +421,91 @@ fn fingerprints_follow_the_lens_and_the_open_interval() {
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(plan(&film).contains("49 frames: 49 up to date"));
     let p = plan(&moved(&film));
-    assert!(p.contains("49 frames: 24 up to date, 25 stale") && p.contains("would render: 24-48"), "{p}");
+    assert!(
+        p.contains("49 frames: 24 up to date, 25 stale") && p.contains("would render: 24-48"),
+        "{p}"
+    );
+    // A still camera's frame is the same image with a shutter, and keeps its fingerprint.
+    let still = sequence(
+        32,
+        18,
+        "camera: { position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }\n",
+    );
+    std::fs::write(dir.join("seq.yaml"), &still).unwrap();
+    let out = run_in(&dir, &["render", "seq.yaml", "-o", "still.png", "-q"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let shutter = still.replace("render: {", "render: { shutter: 180,");
+    std::fs::write(dir.join("seq.yaml"), &shutter).unwrap();
+    let out = run_in(
+        &dir,
+        &["render", "seq.yaml", "-o", "still.png", "--dry-run"],
+    );
+    let p = String::from_utf8(out.stdout).unwrap();
+    assert!(p.contains("1 frame: 1 up to date"), "{p}");
 }
 
 #[test]
 fn a_camera_impossible_while_the_shutter_is_open_fails_that_frame() {
-    // The camera looks straight down (along up) at exactly t = 100.5/256 s: not a frame time,
-    // and not when the shutter opens or closes (which loading checks), but instant 100 of
-    // frame 0's interval (1 fps, 360°, opening at the frame time). Its view tips down and back
-    // up, so no frame-to-frame roll gives it away.
-    let keys = "timeline:
-  fps: 1
-  interpolation: linear
-  keyframes:
-    - { time: 0, position: [0, 0, 0], look_at: [0, -1, 1] }
-    - { time: 0.392578125, look_at: [0, -1, 0] }
-    - { time: 0.78515625, look_at: [0, -1, 1] }
-";
-    let yaml = sequence(16, 9, keys).replace("render: {", "render: { shutter: 360, shutter_offset: 0.5,");
-    let dir = scratch("film-impossible");
-    std::fs::write(dir.join("seq.yaml"), &yaml).unwrap();
-    let out = run_in(&dir, &["render", "seq.yaml", "-o", "out/f_#.png"]);
-    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
-    let log = stderr(&out);
-    assert!(
-        log.contains("frame 0: up is parallel to the view direction, so the camera's roll is undefined (t = 0.392578125 s)"),
-        "{log}"
+    // Loading rejects such keys, and every crossing of the up axis rolls the picture over
+    // between the instants it checks; a degenerate instant is then only reachable through the
+    // library. The camera looks straight down at t = 100.5/256 s: instant 100 of frame 0's
+    // interval (1 fps, 360°, opening at the frame time), which must fail with that time.
+    let pose = |z: f64| Pose {
+        position: DVec3::ZERO,
+        look_at: DVec3::new(0.0, -1.0, z),
+        up: DVec3::Y,
+        fov: 90.0,
+    };
+    let key = |time: f64, z: f64| Key {
+        time,
+        pose: pose(z),
+        ease: Ease::Pass,
+        aperture: 0.0,
+        focus_distance: None,
+    };
+    let keys = vec![key(0.0, 1.0), key(0.392578125, 0.0), key(0.78515625, 1.0)];
+    let timeline = Timeline {
+        fps: 1.0,
+        frame_count: 2,
+        path: TimelinePath::Keys(Box::new(Keyed::new(
+            keys,
+            Interpolation::Linear,
+            Speed::Keys,
+        ))),
+    };
+    let shutter = Shutter {
+        angle: 360.0,
+        offset: 0.5,
+    };
+    let e = Exposure::of_frame(&timeline, Some(shutter), 0).unwrap_err();
+    assert_eq!((e.time, e.reason), (0.392578125, Degenerate::UpParallel));
+    assert_eq!(
+        e.to_string(),
+        "up is parallel to the view direction, so the camera's roll is undefined (t = 0.392578125 s)"
     );
-    assert_eq!(files(&dir.join("out")), vec!["f_1.png"]);
+    assert!(Exposure::of_frame(&timeline, Some(shutter), 1).is_ok());
+}
+
+#[test]
+fn blurred_and_defocused_frames_do_not_depend_on_the_thread_count() {
+    // flyby.yaml: a 180° shutter, an open lens and a focus pull.
+    let flyby = std::fs::read_to_string(repo().join("sequences/flyby.yaml")).unwrap();
+    for samples in ["1", "4", "5"] {
+        let args = |threads| {
+            [
+                "--size",
+                "64x36",
+                "--frames",
+                "30,72,130",
+                "--samples",
+                samples,
+                "--threads",
+                threads,
+            ]
+        };
+        let one = pixels(&render_pngs("film-threads-1", &flyby, &args("1")));
+        let two = pixels(&render_pngs("film-threads-2", &flyby, &args("2")));
+        assert_eq!(one.len(), 3);
+        assert!(one == two, "{samples} samples: --threads 1 and 2 differ");
+    }
 }

@@ -273,10 +273,40 @@ fn every_kernel_equals_scalar(dir: &Path, name: &str, args: &[&str]) {
 fn frames_from_every_kernel_equal_the_scalar_kernels() {
     let tmp = scratch("kernels");
     let talk = std::fs::read_to_string(common::repo().join("sequences/talk.yaml")).unwrap();
-    std::fs::write(tmp.join("seq.yaml"), talk).unwrap();
+    std::fs::write(tmp.join("seq.yaml"), &talk).unwrap();
     every_kernel_equals_scalar(&tmp, "talk", &["--size", "333x187", "--depth"]);
     every_kernel_equals_scalar(&tmp, "final", &["--size", "161x90", "--quality", "final"]);
     every_kernel_equals_scalar(&tmp, "grid", &["--size", "97x55", "--samples", "9"]);
+    // Motion blur and depth of field give each lane its own camera and lens point.
+    let lens = "camera:\n  aperture: 0.08\n  focus_distance: 0.9\n";
+    std::fs::write(tmp.join("seq.yaml"), talk.replacen("camera:\n", lens, 1)).unwrap();
+    every_kernel_equals_scalar(&tmp, "lens", &["--size", "97x55", "--samples", "5"]);
+    let flyby = std::fs::read_to_string(common::repo().join("sequences/flyby.yaml")).unwrap();
+    std::fs::write(tmp.join("seq.yaml"), flyby).unwrap();
+    let frames = ["--frames", "20,100"];
+    let film = |args: &[&'static str]| [&frames[..], args].concat();
+    every_kernel_equals_scalar(
+        &tmp,
+        "film-grid",
+        &film(&["--size", "97x55", "--samples", "4"]),
+    );
+    every_kernel_equals_scalar(
+        &tmp,
+        "film-r2",
+        &film(&["--size", "81x46", "--samples", "3"]),
+    );
+    every_kernel_equals_scalar(
+        &tmp,
+        "film-final",
+        &film(&["--size", "65x37", "--quality", "final"]),
+    );
+    let orbit = std::fs::read_to_string(common::repo().join("sequences/orbit.yaml")).unwrap();
+    std::fs::write(tmp.join("seq.yaml"), orbit).unwrap();
+    every_kernel_equals_scalar(
+        &tmp,
+        "orbit",
+        &["--size", "97x55", "--frames", "5", "--depth"],
+    );
     let mut rng = Rng(7);
     let field = scene(&mut rng, 60, 1).replace(
         "camera: { position: [0, 0, 10]",

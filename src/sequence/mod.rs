@@ -1036,7 +1036,16 @@ fn aperture(path: &str, v: f64) -> Check<f64> {
 
 /// A distance in focus, along the view axis.
 fn focus_distance(path: &str, v: f64) -> Check<f64> {
-    positive(path, v)
+    if number(path, v)? <= 0.0 {
+        return invalid(
+            path,
+            format!(
+                "must be a distance greater than 0 from the camera to the plane in focus {}",
+                got_num(v)
+            ),
+        );
+    }
+    Ok(v)
 }
 
 /// `path` is the mapping holding the pose; the error names the field to change.

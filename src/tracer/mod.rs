@@ -38,22 +38,21 @@ pub struct Settings {
     pub shutter: Option<Shutter>,
 }
 
-/// The derived form, with `shutter` only when there is one: the text is part of every frame's
-/// fingerprint, so files without a shutter keep the fingerprints they had before it existed.
+/// The derived form without `shutter`. The text is part of every frame's fingerprint; the
+/// shutter enters it through the frame's cameras instead (`exposure::describe`), so files
+/// rendered before the shutter existed keep their fingerprints, and a frame whose camera holds
+/// still while the shutter is open (the same image with or without it) stays up to date.
 impl std::fmt::Debug for Settings {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        let mut s = f.debug_struct("Settings");
-        s.field("width", &self.width)
+        f.debug_struct("Settings")
+            .field("width", &self.width)
             .field("height", &self.height)
             .field("max_depth", &self.max_depth)
             .field("depth", &self.depth)
             .field("samples", &self.samples)
             .field("adaptive", &self.adaptive)
-            .field("sampler", &self.sampler);
-        if let Some(shutter) = &self.shutter {
-            s.field("shutter", shutter);
-        }
-        s.finish()
+            .field("sampler", &self.sampler)
+            .finish()
     }
 }
 
