@@ -367,63 +367,37 @@ fn focus_distances_interpolate_and_print_as_the_frames_render_them() {
 
 #[test]
 fn fingerprints_follow_the_lens_and_the_open_interval() {
-    let keys = "timeline:
-  fps: 12
-  interpolation: linear
-  keyframes:
-    - { time: 0, position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }
-    - { time: 2, position: [1.5, 0.4, 0.5] }
-    - { time: 4, position: [0, 0.5, -2.5] }
-";
-    let plain = sequence(32, 18, keys);
+    let plain = sequence(32, 18, THREE_KEYS);
     let dir = scratch("film-fingerprints");
-    let plan = |yaml: &str| {
+    let run = |yaml: &str, output: &str, how: &str| {
         std::fs::write(dir.join("seq.yaml"), yaml).unwrap();
-        let out = run_in(
-            &dir,
-            &["render", "seq.yaml", "-o", "out/f_##.png", "--dry-run"],
-        );
+        let out = run_in(&dir, &["render", "seq.yaml", "-o", output, how]);
         assert!(out.status.success(), "{}", stderr(&out));
         String::from_utf8(out.stdout).unwrap()
     };
-    std::fs::write(dir.join("seq.yaml"), &plain).unwrap();
-    let out = run_in(&dir, &["render", "seq.yaml", "-o", "out/f_##.png", "-q"]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    // Writing out the defaults changes no frame.
+    let expect = |yaml: &str, want: &[&str]| {
+        let p = run(yaml, "out/f_##.png", "--dry-run");
+        assert!(want.iter().all(|w| p.contains(w)), "wanted {want:?}:\n{p}");
+    };
+    run(&plain, "out/f_##.png", "-q");
+    // Writing out the defaults changes no frame; opening the lens changes every one.
+    let first_key = "look_at: [-0.1, -0.1, -0.6] }";
     let explicit = plain
         .replace("render: {", "render: { shutter: 0, shutter_offset: 0.25,")
-        .replace(
-            "look_at: [-0.1, -0.1, -0.6] }",
-            "look_at: [-0.1, -0.1, -0.6], aperture: 0 }",
-        );
-    assert!(
-        plan(&explicit).contains("49 frames: 49 up to date"),
-        "{}",
-        plan(&explicit)
-    );
-    // Opening the lens changes every frame.
-    let lens = plain.replace(
-        "look_at: [-0.1, -0.1, -0.6] }",
-        "look_at: [-0.1, -0.1, -0.6], aperture: 0.05 }",
-    );
-    assert!(
-        plan(&lens).contains("49 frames: 49 stale"),
-        "{}",
-        plan(&lens)
-    );
+        .replace(first_key, "look_at: [-0.1, -0.1, -0.6], aperture: 0 }");
+    expect(&explicit, &["49 frames: 49 up to date"]);
+    let lens = plain.replace(first_key, "look_at: [-0.1, -0.1, -0.6], aperture: 0.05 }");
+    expect(&lens, &["49 frames: 49 stale"]);
     // With a shutter, moving the last key also changes frame 24, which sits on the middle key
     // but whose open interval reaches past it; without one, only frames 25-48 change.
     let moved = |yaml: &str| yaml.replace("position: [0, 0.5, -2.5]", "position: [0.2, 0.5, -2.5]");
-    assert!(plan(&moved(&plain)).contains("would render: 25-48"));
+    expect(&moved(&plain), &["would render: 25-48"]);
     let film = plain.replace("render: {", "render: { shutter: 180,");
-    std::fs::write(dir.join("seq.yaml"), &film).unwrap();
-    let out = run_in(&dir, &["render", "seq.yaml", "-o", "out/f_##.png", "-q"]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    assert!(plan(&film).contains("49 frames: 49 up to date"));
-    let p = plan(&moved(&film));
-    assert!(
-        p.contains("49 frames: 24 up to date, 25 stale") && p.contains("would render: 24-48"),
-        "{p}"
+    run(&film, "out/f_##.png", "-q");
+    expect(&film, &["49 frames: 49 up to date"]);
+    expect(
+        &moved(&film),
+        &["49 frames: 24 up to date, 25 stale", "would render: 24-48"],
     );
     // A still camera's frame is the same image with a shutter, and keeps its fingerprint.
     let still = sequence(
@@ -431,17 +405,9 @@ fn fingerprints_follow_the_lens_and_the_open_interval() {
         18,
         "camera: { position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }\n",
     );
-    std::fs::write(dir.join("seq.yaml"), &still).unwrap();
-    let out = run_in(&dir, &["render", "seq.yaml", "-o", "still.png", "-q"]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    run(&still, "still.png", "-q");
     let shutter = still.replace("render: {", "render: { shutter: 180,");
-    std::fs::write(dir.join("seq.yaml"), &shutter).unwrap();
-    let out = run_in(
-        &dir,
-        &["render", "seq.yaml", "-o", "still.png", "--dry-run"],
-    );
-    let p = String::from_utf8(out.stdout).unwrap();
-    assert!(p.contains("1 frame: 1 up to date"), "{p}");
+    assert!(run(&shutter, "still.png", "--dry-run").contains("1 frame: 1 up to date"));
 }
 
 #[test]
