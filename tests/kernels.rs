@@ -282,7 +282,7 @@ fn frames_from_every_kernel_equal_the_scalar_kernels() {
     std::fs::write(tmp.join("seq.yaml"), talk.replacen("camera:\n", lens, 1)).unwrap();
     every_kernel_equals_scalar(&tmp, "lens", &["--size", "97x55", "--samples", "5"]);
     let flyby = std::fs::read_to_string(common::repo().join("sequences/flyby.yaml")).unwrap();
-    std::fs::write(tmp.join("seq.yaml"), flyby).unwrap();
+    std::fs::write(tmp.join("seq.yaml"), &flyby).unwrap();
     let frames = ["--frames", "20,100"];
     let film = |args: &[&'static str]| [&frames[..], args].concat();
     every_kernel_equals_scalar(
@@ -299,6 +299,17 @@ fn frames_from_every_kernel_equal_the_scalar_kernels() {
         &tmp,
         "film-final",
         &film(&["--size", "65x37", "--quality", "final"]),
+    );
+    // A lens opening from a pinhole at frame 0: lanes of one packet with and without a lens.
+    let opening = flyby
+        .replacen("aperture: 0.04 }", "aperture: 0 }", 1)
+        .replacen("fov: 65 }", "fov: 65, aperture: 0.08 }", 1);
+    assert_ne!(opening, flyby);
+    std::fs::write(tmp.join("seq.yaml"), opening).unwrap();
+    every_kernel_equals_scalar(
+        &tmp,
+        "opening",
+        &["--size", "97x55", "--frames", "0-1", "--samples", "4"],
     );
     let orbit = std::fs::read_to_string(common::repo().join("sequences/orbit.yaml")).unwrap();
     std::fs::write(tmp.join("seq.yaml"), orbit).unwrap();

@@ -334,7 +334,10 @@ fn sampled_rays<V: Lanes>(
             let j = ((t * INSTANTS as f64) as usize).min(INSTANTS - 1);
             cameras[lane] = &exposure.instants[j];
         }
-        disc[lane] = concentric(a, b);
+        // sin and cos cost more than the rest of the ray: only for a lens that is open.
+        if cameras[lane].lens_radius > 0.0 {
+            disc[lane] = concentric(a, b);
+        }
     }
     let s = pass.settings;
     let (x, y) = screen_points(row, col, u, v, s.width, s.height);
