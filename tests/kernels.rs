@@ -292,15 +292,40 @@ fn every_kernel_equals_scalar(dir: &Path, name: &str, args: &[&str]) {
 fn frames_from_every_kernel_equal_the_scalar_kernels() {
     let tmp = scratch("kernels");
     let talk = std::fs::read_to_string(common::repo().join("sequences/talk.yaml")).unwrap();
-    std::fs::write(tmp.join("seq.yaml"), &talk).unwrap();
+    std::fs::write(tmp.join("seq.yaml"), talk).unwrap();
     every_kernel_equals_scalar(&tmp, "talk", &["--size", "333x187", "--depth"]);
     every_kernel_equals_scalar(&tmp, "final", &["--size", "161x90", "--quality", "final"]);
     every_kernel_equals_scalar(&tmp, "grid", &["--size", "97x55", "--samples", "9"]);
-    // Motion blur and depth of field give each lane its own camera and lens point.
+    let mut rng = Rng(7);
+    let field = scene(&mut rng, 60, 1, false).replace(
+        "camera: { position: [0, 0, 10]",
+        "render: { max_depth: 4 }\ncamera: { position: [0, 0, 10]",
+    );
+    std::fs::write(tmp.join("seq.yaml"), field).unwrap();
+    every_kernel_equals_scalar(&tmp, "field", &["--size", "130x70", "--samples", "5"]);
+    let glass = scene(&mut rng, 20, 2, true).replace(
+        "camera: { position: [0, 0, 10]",
+        "render: { max_depth: 6 }\ncamera: { position: [0, 0, 10]",
+    );
+    std::fs::write(tmp.join("seq.yaml"), glass).unwrap();
+    every_kernel_equals_scalar(&tmp, "glass", &["--size", "120x66", "--samples", "5"]);
+    let glass_seq = std::fs::read_to_string(common::repo().join("sequences/glass.yaml")).unwrap();
+    std::fs::write(tmp.join("seq.yaml"), glass_seq).unwrap();
+    every_kernel_equals_scalar(&tmp, "glass.yaml", &["--size", "96x54", "--frames", "0,30"]);
+    let out = run_in(&tmp, &["check", "seq.yaml"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
+/// Motion blur and depth of field give each lane its own camera, instant and lens point.
+#[test]
+fn blurred_and_defocused_frames_from_every_kernel_equal_the_scalar_kernels() {
+    let tmp = scratch("kernels-film");
+    let read = |name: &str| std::fs::read_to_string(common::repo().join(name)).unwrap();
+    let talk = read("sequences/talk.yaml");
     let lens = "camera:\n  aperture: 0.08\n  focus_distance: 0.9\n";
     std::fs::write(tmp.join("seq.yaml"), talk.replacen("camera:\n", lens, 1)).unwrap();
     every_kernel_equals_scalar(&tmp, "lens", &["--size", "97x55", "--samples", "5"]);
-    let flyby = std::fs::read_to_string(common::repo().join("sequences/flyby.yaml")).unwrap();
+    let flyby = read("sequences/flyby.yaml");
     std::fs::write(tmp.join("seq.yaml"), &flyby).unwrap();
     let frames = ["--frames", "20,100"];
     let film = |args: &[&'static str]| [&frames[..], args].concat();
@@ -330,31 +355,19 @@ fn frames_from_every_kernel_equal_the_scalar_kernels() {
         "opening",
         &["--size", "97x55", "--frames", "0-1", "--samples", "4"],
     );
-    let orbit = std::fs::read_to_string(common::repo().join("sequences/orbit.yaml")).unwrap();
+    let orbit = read("sequences/orbit.yaml");
     std::fs::write(tmp.join("seq.yaml"), orbit).unwrap();
     every_kernel_equals_scalar(
         &tmp,
         "orbit",
         &["--size", "97x55", "--frames", "5", "--depth"],
     );
-    let mut rng = Rng(7);
-    let field = scene(&mut rng, 60, 1, false).replace(
-        "camera: { position: [0, 0, 10]",
-        "render: { max_depth: 4 }\ncamera: { position: [0, 0, 10]",
-    );
-    std::fs::write(tmp.join("seq.yaml"), field).unwrap();
-    every_kernel_equals_scalar(&tmp, "field", &["--size", "130x70", "--samples", "5"]);
-    let glass = scene(&mut rng, 20, 2, true).replace(
-        "camera: { position: [0, 0, 10]",
-        "render: { max_depth: 6 }\ncamera: { position: [0, 0, 10]",
-    );
+    let glass = read("sequences/glass.yaml")
+        .replacen("  samples: 4\n", "  samples: 4\n  shutter: 180\n", 1)
+        .replacen("  fov: 70\n", "  fov: 70\n  aperture: 0.05\n", 1);
+    assert!(glass.contains("shutter: 180") && glass.contains("aperture: 0.05"));
     std::fs::write(tmp.join("seq.yaml"), glass).unwrap();
-    every_kernel_equals_scalar(&tmp, "glass", &["--size", "120x66", "--samples", "5"]);
-    let glass_seq = std::fs::read_to_string(common::repo().join("sequences/glass.yaml")).unwrap();
-    std::fs::write(tmp.join("seq.yaml"), glass_seq).unwrap();
-    every_kernel_equals_scalar(&tmp, "glass.yaml", &["--size", "96x54", "--frames", "0,30"]);
-    let out = run_in(&tmp, &["check", "seq.yaml"]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    every_kernel_equals_scalar(&tmp, "glass", &["--size", "96x54", "--frames", "0,30"]);
 }
 
 /// The wide kernels are generic code inlined into `#[target_feature]` functions; anything on

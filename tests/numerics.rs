@@ -966,7 +966,11 @@ fn parallel_mirrors_at_depth_1000_are_finite_and_linear() {
         // Work is linear in depth: one ray per surface visited, counted rather than timed
         // (the machine is shared); rays parallel to the mirrors are one ray each.
         let missing = (size * size) as u64 - bouncing;
-        assert_eq!(frame.rays, bouncing * u64::from(depth) + missing, "depth {depth}");
+        assert_eq!(
+            frame.rays,
+            bouncing * u64::from(depth) + missing,
+            "depth {depth}"
+        );
     }
     // Lit, with shadow rays at every surface, at the deepest depth accepted.
     let seq = parse(&mirrors_yaml(10_000, 32, true));
