@@ -9,15 +9,15 @@
 //!   keyframes:
 //!     - { time: 0.0, position: [0, 0.3, 1.5], look_at: [0, 0, -0.5] }
 //!     - { time: 2.0, position: [1.5, 0.5, -0.5], fov: 70, ease: stop }
-//!     - { time: 3.0, aperture: 0.05, focus_distance: 2.5 }   # a focus pull from the key before
+//!     - { time: 3.0, aperture: 0.05, focus_distance: 2.5 }   # focus pulled from the key before
 //!   # or, instead of keyframes:
 //!   orbit: { center: [0, 0, -1], radius: 1.6, height: 0.35, start_angle: 0, turns: 1, duration: 6 }
 //! ```
 //! Position, look-at, up, fov, aperture and focus distance are separate tracks; each key holds
 //! them all (absent values carry over from the previous key). Without any focus distance the
-//! focus follows look_at: it is |look_at − position| at every t. Every track has a shape through its key values (`shape`)
-//! and a timing along it (`timing`), so its speed is continuous through the keys. A key's
-//! `ease: stop` halts every track there.
+//! focus follows look_at: it is |look_at − position| at every t. Every track has a shape
+//! through its key values (`shape`) and a timing along it (`timing`), so its speed is
+//! continuous through the keys. A key's `ease: stop` halts every track there.
 
 mod shape;
 mod timing;
