@@ -257,6 +257,64 @@ mod tests {
     }
 
     #[test]
+    fn time_and_lens_coordinates_are_the_readmes() {
+        // Bits from tests/reference/sample_dims_reference.py, written from the README alone.
+        let cases = [
+            (
+                Pattern::Grid(2),
+                7,
+                12345,
+                0,
+                [0x3fdca9cd3ee71220, 0x3fd99d1b48f03702, 0x3fde0671cead9d54],
+            ),
+            (
+                Pattern::Grid(2),
+                7,
+                12345,
+                3,
+                [0x3fe357f332df7f36, 0x3fe4b7e2309593c4, 0x3fe08da2f6e27eb8],
+            ),
+            (
+                Pattern::Grid(3),
+                3,
+                999,
+                8,
+                [0x3fca06f014089647, 0x3fec18d0f1f72689, 0x3fd22f4e344f666a],
+            ),
+            (
+                Pattern::R2,
+                7,
+                12345,
+                0,
+                [0x3fd4bfaf88c29604, 0x3feac619c943e4eb, 0x3fda58d6708254b0],
+            ),
+            (
+                Pattern::R2,
+                7,
+                12345,
+                31,
+                [0x3fe6fe57494d6460, 0x3fe472f77c12b1c0, 0x3fdcf3e8c03071c0],
+            ),
+            (
+                Pattern::Centre,
+                7,
+                12345,
+                0,
+                [0x3fe9539a7dce2440, 0x3fe99d1b48f03702, 0x3fee0671cead9d54],
+            ),
+        ];
+        for (pattern, frame, pixel, k, want) in cases {
+            let got = Dims::new(pattern, frame, pixel)
+                .at(pattern, k)
+                .map(f64::to_bits);
+            assert_eq!(
+                got, want,
+                "{pattern:?} frame {frame} pixel {pixel} sample {k}"
+            );
+        }
+    }
+
+    #[test]
     fn grid_samples_use_each_time_stratum_and_lens_cell_once() {
         let pattern = Pattern::Grid(4);
         let d = Dims::new(pattern, 7, 12345);
