@@ -4,8 +4,8 @@
 //! of the sequence or with a slow reader. Workers only compute (render, encode); this thread
 //! does all I/O: atomic file writes as frames finish, the stream strictly in frame order.
 
-use crate::camera::Camera;
 use crate::claim::{Attempt, Claims};
+use crate::exposure::{self, Exposure};
 use crate::frame::Frame;
 use crate::output::{
     self, FileFormat, FrameMeta, fingerprint, pattern::Pattern, stream::StreamFormat,
@@ -354,9 +354,9 @@ pub fn render_with(
     n: u64,
     settings: &Settings,
 ) -> Result<Frame, String> {
-    let pose = seq.timeline.pose_of(n);
-    let camera = Camera::new(&pose).map_err(|e| format!("frame {n}: {e}"))?;
-    Ok(tracer::render(world, &camera, settings, n))
+    let exposure = Exposure::of_frame(&seq.timeline, settings.shutter, n)
+        .map_err(|e| format!("frame {n}: {e}"))?;
+    Ok(tracer::render(world, &exposure, settings, n))
 }
 
 /// A worker's whole job for one frame: render, then encode for each sink that wants it;
@@ -371,8 +371,9 @@ fn produce(
 ) -> Produced {
     let start = Instant::now();
     let n = task.frame;
-    let camera = Camera::new(&seq.timeline.pose_of(n)).map_err(|e| format!("frame {n}: {e}"))?;
-    let Some(frame) = tracer::render_or_stop(world, &camera, &seq.settings, n, cancel) else {
+    let exposure = Exposure::of_frame(&seq.timeline, seq.settings.shutter, n)
+        .map_err(|e| format!("frame {n}: {e}"))?;
+    let Some(frame) = tracer::render_or_stop(world, &exposure, &seq.settings, n, cancel) else {
         return Ok(None);
     };
     let file = match files.filter(|_| task.write_file) {
@@ -406,8 +407,11 @@ pub fn frame_meta(seq: &Sequence, n: u64, run_hash: &fingerprint::Hasher) -> Fra
         frame: n,
         time: seq.timeline.time_of(n),
         fps: seq.timeline.fps,
-        fingerprint: fingerprint::of_frame(run_hash, &seq.timeline.pose_of(n)),
-        matrices: Camera::new(&seq.timeline.pose_of(n))
+        fingerprint: fingerprint::of_frame(
+            run_hash,
+            &exposure::describe(&seq.timeline, seq.settings.shutter, n),
+        ),
+        matrices: crate::camera::Camera::new(&seq.timeline.pose_of(n))
             .ok()
             .map(|c| c.exr_matrices(seq.settings.width, seq.settings.height)),
     }

@@ -8,6 +8,8 @@ use rayreel::measure::{self, compare};
 use rayreel::sequence::{self, Overrides, Quality};
 use rayreel::tracer::{Adaptive, Sampler, Settings};
 
+/// Frame 0 of orbit.yaml without its shutter: these tests measure how samples resolve the
+/// edges of one instant, which motion blur would smear.
 fn orbit(size: (u64, u64)) -> rayreel::sequence::Sequence {
     // One uniform sample to start from: each test sets the sampling it measures.
     let o = Overrides {
@@ -15,7 +17,9 @@ fn orbit(size: (u64, u64)) -> rayreel::sequence::Sequence {
         samples: Some(1),
         ..Overrides::default()
     };
-    sequence::load(&repo().join("sequences/orbit.yaml"), &o).unwrap()
+    let mut seq = sequence::load(&repo().join("sequences/orbit.yaml"), &o).unwrap();
+    seq.settings.shutter = None;
+    seq
 }
 
 fn floats(seq: &rayreel::sequence::Sequence, s: &Settings) -> (Vec<f32>, u64) {

@@ -188,7 +188,7 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
     };
     let s = &seq.settings;
     format!(
-        "{file}: ok\n  objects:    {} ({spheres} spheres, {planes} planes)\n  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {} at {} fps ({:.2} s), {camera}\n{}  output:     {}\n",
+        "{file}: ok\n  objects:    {} ({spheres} spheres, {planes} planes)\n  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {} at {} fps ({:.2} s), {camera}\n{}{}  output:     {}\n",
         scene.objects.len(),
         scene.materials.len(),
         scene.lights.len(),
@@ -205,6 +205,7 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
         t.fps,
         t.frame_count as f64 / t.fps,
         timing(t),
+        film(seq),
         printable(&seq.output)
     )
 }
@@ -228,6 +229,30 @@ fn picture(s: &crate::tracer::Settings) -> String {
         s.encoding.name(),
         s.exposure
     )
+}
+
+/// The `film:` line when frames are more than a pinhole's instant: a shutter, an open lens.
+fn film(seq: &Sequence) -> String {
+    let widest = match &seq.timeline.path {
+        TimelinePath::Orbit(o) => o.aperture,
+        TimelinePath::Keys(k) => k.keys.iter().map(|k| k.aperture).fold(0.0, f64::max),
+    };
+    let mut parts = Vec::new();
+    if let Some(s) = seq.settings.shutter {
+        parts.push(format!(
+            "{}° shutter (open {:.4} s a frame, offset {})",
+            s.angle,
+            s.angle / 360.0 / seq.timeline.fps,
+            s.offset
+        ));
+    }
+    if widest > 0.0 {
+        parts.push(format!("lens aperture up to {widest}"));
+    }
+    if parts.is_empty() {
+        return String::new();
+    }
+    format!("  film:       {}\n", parts.join(", "))
 }
 
 /// The `timing:` line of a keyframed move: stops, or what constant speed does to key times.

@@ -4,7 +4,6 @@
 //! attribute), so a frame describes itself wherever it is copied, and shards on a shared
 //! directory need no common manifest.
 
-use crate::camera::Pose;
 use crate::output::FileFormat;
 use crate::scene::Scene;
 use crate::tracer::Settings;
@@ -58,9 +57,11 @@ pub fn of_run(scene: &Scene, settings: &Settings, format: &FileFormat) -> Hasher
     h
 }
 
-/// The fingerprint of one frame: the run's hash extended with the frame's camera.
-pub fn of_frame(run: &Hasher, pose: &Pose) -> String {
+/// The fingerprint of one frame: the run's hash extended with the frame's camera, as text
+/// (`exposure::describe`: the pose's `Debug` form, and the lens and the cameras of the open
+/// interval when they matter).
+pub fn of_frame(run: &Hasher, camera: &str) -> String {
     let mut h = *run;
-    h.write(format!("{pose:?}").as_bytes());
+    h.write(camera.as_bytes());
     h.hex()
 }

@@ -13,9 +13,10 @@ mod timeline;
 pub use guard::nesting_depth;
 
 use crate::camera::{Camera, Degenerate, Pose};
+use crate::exposure::Shutter;
 use crate::output::{atomic, pattern::Pattern};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
-use crate::timeline::Timeline;
+use crate::timeline::{Ease, Key, Timeline};
 use crate::tracer::{Adaptive, Sampler, Settings};
 use crate::transfer::Encoding;
 use glam::DVec3;
@@ -524,11 +525,11 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<(Sequence, Option<Invalid>)
     for (i, l) in raw.lights.iter().enumerate() {
         lights.push(light(&format!("lights[{i}]"), l)?);
     }
-    let camera = raw.camera.as_ref().map(camera_pose).transpose()?;
+    let camera = raw.camera.as_ref().map(camera_key).transpose()?;
     let loaded = match (&raw.timeline, camera) {
-        (Some(t), camera) => timeline::timeline(t, camera)?,
-        (None, Some(pose)) => timeline::Loaded {
-            timeline: Timeline::still(pose),
+        (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
+        (None, Some(key)) => timeline::Loaded {
+            timeline: Timeline::still(key),
             warnings: Vec::new(),
             problem: None,
         },
@@ -578,6 +579,7 @@ fn render_settings(r: &raw::Render) -> Check<Settings> {
             None => 0.0,
         },
         encoding: r.encoding.unwrap_or_default(),
+        shutter: shutter(r)?,
     };
     if r.quality.is_none() && r.samples.is_none() && r.adaptive.is_none() {
         default_sampling(&mut s);
@@ -659,6 +661,25 @@ fn default_sampling(s: &mut Settings) {
 pub const DEFAULT_SAMPLES: u32 = 4;
 /// `render.adaptive.max_samples` when a file sets no sampling.
 pub const DEFAULT_SAMPLING_MAX: u32 = 16;
+
+/// `render.shutter` and `render.shutter_offset`; None when the shutter angle is 0.
+fn shutter(r: &raw::Render) -> Check<Option<Shutter>> {
+    let angle = in_range(
+        "render.shutter",
+        r.shutter.unwrap_or(0.0),
+        0.0,
+        360.0,
+        "an angle in [0, 360] degrees (0: no motion blur, 180: film)",
+    )?;
+    let offset = in_range(
+        "render.shutter_offset",
+        r.shutter_offset.unwrap_or(0.0),
+        -0.5,
+        0.5,
+        "in [-0.5, 0.5] (0: open interval centred on the frame time, 0.5: opening at it, -0.5: closing at it)",
+    )?;
+    Ok((angle > 0.0).then_some(Shutter { angle, offset }))
+}
 
 /// Default `render.adaptive.threshold`: a linear colour difference of about 8/255.
 pub const DEFAULT_THRESHOLD: f64 = 0.03;
@@ -1070,7 +1091,8 @@ fn spot(path: &str, s: &raw::SpotLight) -> Check<Light> {
     })
 }
 
-fn camera_pose(c: &raw::Camera) -> Check<Pose> {
+/// `camera:` as a key at time 0: a still camera, or what the first keyframe starts from.
+fn camera_key(c: &raw::Camera) -> Check<Key> {
     let pose = Pose {
         position: vector("camera.position", c.position)?,
         look_at: vector("camera.look_at", c.look_at)?,
@@ -1078,7 +1100,44 @@ fn camera_pose(c: &raw::Camera) -> Check<Pose> {
         fov: fov("camera.fov", c.fov.unwrap_or(90.0))?,
     };
     check_pose("camera", &pose)?;
-    Ok(pose)
+    Ok(Key {
+        time: 0.0,
+        pose,
+        ease: Ease::Pass,
+        aperture: aperture("camera.aperture", c.aperture.unwrap_or(0.0))?,
+        focus_distance: c
+            .focus_distance
+            .map(|f| focus_distance("camera.focus_distance", f))
+            .transpose()?,
+    })
+}
+
+/// A lens diameter: 0 (a pinhole) or more.
+fn aperture(path: &str, v: f64) -> Check<f64> {
+    if number(path, v)? < 0.0 {
+        return invalid(
+            path,
+            format!(
+                "must be 0 (a pinhole) or a positive lens diameter {}",
+                got_num(v)
+            ),
+        );
+    }
+    Ok(v)
+}
+
+/// A distance in focus, along the view axis.
+fn focus_distance(path: &str, v: f64) -> Check<f64> {
+    if number(path, v)? <= 0.0 {
+        return invalid(
+            path,
+            format!(
+                "must be a distance greater than 0 from the camera to the plane in focus {}",
+                got_num(v)
+            ),
+        );
+    }
+    Ok(v)
 }
 
 /// `path` is the mapping holding the pose; the error names the field to change.

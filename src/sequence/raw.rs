@@ -38,6 +38,8 @@ pub struct Render {
     pub encoding: Option<crate::transfer::Encoding>,
     pub exposure: Option<f64>,
     pub alpha: Option<bool>,
+    pub shutter: Option<f64>,
+    pub shutter_offset: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -72,6 +74,8 @@ pub struct Camera {
     pub look_at: V3,
     pub up: Option<V3>,
     pub fov: Option<f64>,
+    pub aperture: Option<f64>,
+    pub focus_distance: Option<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -282,6 +286,8 @@ pub struct Keyframe {
     pub look_at: Option<V3>,
     pub up: Option<V3>,
     pub fov: Option<f64>,
+    pub aperture: Option<f64>,
+    pub focus_distance: Option<f64>,
     /// A string rather than an enum, so that the eases of earlier versions get a message
     /// saying what replaces them.
     pub ease: Option<String>,
