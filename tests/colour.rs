@@ -338,13 +338,13 @@ fn exr_frames_carry_camera_matrices_and_finite_depth() {
     }
 }
 
-/// A file that sets no sampling gets 4 jittered samples, adaptive up to 16.
+/// A file that sets no sampling gets 2 samples, adaptive up to 8.
 #[test]
-fn default_sampling_is_adaptive_four_to_sixteen() {
+fn default_sampling_is_adaptive_two_to_eight() {
     let tmp = setup("defaults");
     let explicit = SCENE.replace(
         "max_depth: 3,",
-        "max_depth: 3, samples: 4, adaptive: { max_samples: 16 },",
+        "max_depth: 3, samples: 2, adaptive: { max_samples: 8 },",
     );
     std::fs::write(tmp.join("e.yaml"), explicit).unwrap();
     render(&tmp, &["-o", "d/f_####.png"]);

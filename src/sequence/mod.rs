@@ -658,9 +658,9 @@ fn default_sampling(s: &mut Settings) {
 }
 
 /// `render.samples` when a file sets no sampling.
-pub const DEFAULT_SAMPLES: u32 = 4;
+pub const DEFAULT_SAMPLES: u32 = 2;
 /// `render.adaptive.max_samples` when a file sets no sampling.
-pub const DEFAULT_SAMPLING_MAX: u32 = 16;
+pub const DEFAULT_SAMPLING_MAX: u32 = 8;
 
 /// `render.shutter` and `render.shutter_offset`; None when the shutter angle is 0.
 fn shutter(r: &raw::Render) -> Check<Option<Shutter>> {
