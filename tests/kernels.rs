@@ -357,6 +357,11 @@ fn blurred_and_defocused_frames_from_every_kernel_equal_the_scalar_kernels() {
         "film-final",
         &film(&["--size", "65x37", "--quality", "final"]),
     );
+    every_kernel_equals_scalar(
+        &tmp,
+        "film-alpha",
+        &film(&["--size", "65x37", "--alpha", "--exposure", "-0.5"]),
+    );
     // A lens opening from a pinhole at frame 0: lanes of one packet with and without a lens.
     let opening = flyby
         .replacen("aperture: 0.04 }", "aperture: 0 }", 1)
