@@ -142,7 +142,7 @@ pub fn field(n: usize) -> String {
     let side = (n as f64).sqrt().ceil() as usize;
     let spacing = 20.0 / side as f64;
     let mut s = String::from(
-        "render: { width: 640, height: 360, max_depth: 2 }\ncamera: { position: [0, 8, 14], look_at: [0, 0, 0], fov: 70 }\nmaterials:\n  ball: { ambient: [0.1, 0, 0], diffuse: [0.7, 0.2, 0.1], specular: [1, 1, 1], shininess: 100, reflection: 0.3 }\n  floor: { ambient: [0.1, 0.1, 0.1], diffuse: [0.6, 0.6, 0.6], reflection: 0.2 }\nlights:\n  - point: { position: [5, 10, 8], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }\nobjects:\n  - plane: { point: [0, 0, 0], normal: [0, 1, 0], material: floor }\n",
+        "render: { width: 640, height: 360, max_depth: 2, samples: 1 }\ncamera: { position: [0, 8, 14], look_at: [0, 0, 0], fov: 70 }\nmaterials:\n  ball: { ambient: [0.1, 0, 0], diffuse: [0.7, 0.2, 0.1], specular: [1, 1, 1], shininess: 100, reflection: 0.3 }\n  floor: { ambient: [0.1, 0.1, 0.1], diffuse: [0.6, 0.6, 0.6], reflection: 0.2 }\nlights:\n  - point: { position: [5, 10, 8], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }\nobjects:\n  - plane: { point: [0, 0, 0], normal: [0, 1, 0], material: floor }\n",
     );
     let mut state = 0x2545_f491_4f6c_dd1du64;
     let mut rnd = || {
@@ -336,8 +336,13 @@ fn kernels(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), Stri
             .join(", ")
     ));
     let pool = pool(cores)?;
+    if !TALK.contains("  samples: 1\n") {
+        return Err(
+            "bench: talk.yaml no longer says `samples: 1`; update the kernels bench".into(),
+        );
+    }
     for (name, size, setting) in cases {
-        let text = TALK.replace("render:\n", &format!("render:\n  {setting}\n"));
+        let text = TALK.replace("  samples: 1\n", &format!("  {setting}\n"));
         let seq = load(&text, size)?;
         let world = World::new(seq.scene.clone());
         let exposure = first_exposure(&seq)?;
