@@ -124,8 +124,8 @@ pub struct PreviewArgs {
     #[arg(long, value_name = "SPEC", value_parser = parse_frame_spec)]
     pub frames: Option<FrameSpec>,
     /// Number of evenly spaced frames on the contact sheet.
-    #[arg(long, value_name = "N", default_value_t = crate::preview::DEFAULT_TILES,
-          value_parser = clap::value_parser!(u64).range(1..=crate::preview::MAX_TILES))]
+    #[arg(long, value_name = "N", default_value_t = crate::tools::preview::DEFAULT_TILES,
+          value_parser = clap::value_parser!(u64).range(1..=crate::tools::preview::MAX_TILES))]
     pub tiles: u64,
 }
 

@@ -1,22 +1,20 @@
 //! rayreel: sequence file → validated scene + timeline → per-frame camera → tracer → frame
 //! buffer → sinks. `run` is the whole program behind the command line.
 
-pub mod bench;
 pub mod camera;
 pub mod claim;
 pub mod cli;
 pub mod console;
 pub mod frame;
 pub mod frameset;
-pub mod measure;
 pub mod output;
 pub mod plan;
-pub mod preview;
 pub mod progress;
 pub mod scene;
 pub mod schedule;
 pub mod sequence;
 pub mod timeline;
+pub mod tools;
 pub mod tracer;
 
 mod commands;

@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 
-use rayreel::preview::{self, SheetLayout};
+use rayreel::tools::preview::{self, SheetLayout};
 use rayreel::schedule::render_frame;
 use rayreel::sequence::{self, Overrides, Sequence};
 use rayreel::timeline::Path as TimelinePath;

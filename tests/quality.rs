@@ -4,7 +4,7 @@
 
 mod common;
 use common::*;
-use rayreel::measure::{self, compare};
+use rayreel::tools::measure::{self, compare};
 use rayreel::sequence::{self, Overrides, Quality};
 use rayreel::tracer::{Adaptive, Sampler, Settings};
 

@@ -28,7 +28,7 @@ pub fn run(cli: Cli) -> Result<(), Error> {
 /// the camera inside an object.
 fn warnings(seq: &Sequence) -> Vec<String> {
     let mut all = seq.warnings.clone();
-    all.extend(crate::preview::inside_warnings(seq));
+    all.extend(crate::tools::preview::inside_warnings(seq));
     all
 }
 
@@ -42,7 +42,7 @@ fn print_warnings(seq: &Sequence) {
 /// camera path go to stderr. A path whose camera cannot be built somewhere is still drawn,
 /// with the reason, and then reported as the load error it is (exit 2).
 fn preview(args: PreviewArgs) -> Result<(), Error> {
-    use crate::preview;
+    use crate::tools::preview;
     let (seq, problem) = sequence::load_drawable(&args.file, &Overrides::default())?;
     let count = seq.timeline.frame_count;
     let frames = match &args.frames {
@@ -287,7 +287,7 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
         args.frame,
         shown(&args.file)
     );
-    let report = crate::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
+    let report = crate::tools::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
         eprintln!("  {line}")
     })
     .map_err(Error::Failed)?;
@@ -306,13 +306,13 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
 }
 
 fn bench(args: BenchArgs) -> Result<(), Error> {
-    let options = crate::bench::Options {
+    let options = crate::tools::bench::Options {
         runs: args.runs as usize,
         only: args.only,
         quick: args.quick,
     };
     // A reader that has gone ends the output, not the benchmark's own error reporting.
-    crate::bench::run(&options, &mut |line| {
+    crate::tools::bench::run(&options, &mut |line| {
         let _ = console::print(&format!("{line}\n"));
     })
     .map_err(Error::Failed)

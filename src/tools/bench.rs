@@ -16,9 +16,9 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-const TALK: &str = include_str!("../sequences/talk.yaml");
-const TALK_ORBIT: &str = include_str!("../sequences/bench/talk_orbit.yaml");
-const TALK_POV: &str = include_str!("../sequences/bench/talk_orbit.pov");
+const TALK: &str = include_str!("../../sequences/talk.yaml");
+const TALK_ORBIT: &str = include_str!("../../sequences/bench/talk_orbit.yaml");
+const TALK_POV: &str = include_str!("../../sequences/bench/talk_orbit.pov");
 
 /// Median, min and max of some seconds.
 #[derive(Debug, Clone, Copy)]
