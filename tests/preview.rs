@@ -4,10 +4,10 @@
 mod common;
 use common::*;
 
-use rayreel::tools::preview::{self, SheetLayout};
 use rayreel::schedule::render_frame;
 use rayreel::sequence::{self, Overrides, Sequence};
 use rayreel::timeline::Path as TimelinePath;
+use rayreel::tools::preview::{self, SheetLayout};
 use std::path::Path;
 
 fn load(path: &Path) -> Sequence {

@@ -4,8 +4,8 @@
 
 mod common;
 use common::*;
-use rayreel::tools::measure::{self, compare};
 use rayreel::sequence::{self, Overrides, Quality};
+use rayreel::tools::measure::{self, compare};
 use rayreel::tracer::{Adaptive, Sampler, Settings};
 
 fn orbit(size: (u64, u64)) -> rayreel::sequence::Sequence {

@@ -287,10 +287,11 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
         args.frame,
         shown(&args.file)
     );
-    let report = crate::tools::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
-        eprintln!("  {line}")
-    })
-    .map_err(Error::Failed)?;
+    let report =
+        crate::tools::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
+            eprintln!("  {line}")
+        })
+        .map_err(Error::Failed)?;
     out(&report.table())?;
     for (name, text) in [
         ("measure.csv", report.csv()),
