@@ -219,11 +219,16 @@ impl Delivery<'_> {
             1 => "the frame in flight is cancelled at the next pixel".to_string(),
             n => format!("the {n} frames in flight are cancelled at the next pixel"),
         };
-        self.progress.warn(&format!(
-            "rayreel: stopping on {}: {what}; frames already written stay; exit code {} follows (a second signal exits at once)",
+        let again = match signal_name() {
+            "SIGINT" => "Ctrl-C again to abort at once",
+            _ => "a second signal aborts at once",
+        };
+        let text = format!(
+            "rayreel: stopping on {}: {what}; frames already written stay; exit code {} follows ({again})",
             signal_name(),
             interrupt_code()
-        ));
+        );
+        self.progress.interrupt(signal_name(), in_flight, &text);
     }
 
     /// The run's outcome; claims still held for frames left behind are released.

@@ -119,7 +119,7 @@ fn damaged_files_are_rerendered_and_foreign_ones_kept() {
         log.contains("out/f_0007.png: not written by rayreel (no fingerprint); leaving it alone"),
         "{log}"
     );
-    assert!(log.contains("frames 7 were not written"), "{log}");
+    assert!(log.contains("frame 7 was not written"), "{log}");
     assert_eq!(std::fs::read(out.join("f_0007.png")).unwrap(), foreign);
     for n in [3, 5, 6] {
         let name = format!("f_{n:04}.png");

@@ -9,7 +9,7 @@ use crate::frame::Frame;
 use crate::output::{FileFormat, pattern::Pattern, png::Compression, stream::StreamFormat};
 use crate::progress::Progress;
 use crate::schedule::{self, Files, Job, Task};
-use crate::sequence::{self, Overrides, Sequence};
+use crate::sequence::{self, Sequence};
 use crate::tracer::{self, Kernel, World};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -47,12 +47,10 @@ fn repeat(runs: usize, mut f: impl FnMut() -> Result<(), String>) -> Result<Timi
     Ok(timing(t))
 }
 
-fn load(text: &str, size: (u64, u64)) -> Result<Sequence, String> {
-    let o = Overrides {
-        size: Some(size),
-        ..Overrides::default()
-    };
-    sequence::parse(Path::new("bench.yaml"), text, &o).map_err(|e| e.to_string())
+fn load(text: &str, (width, height): (u32, u32)) -> Result<Sequence, String> {
+    let mut seq = sequence::parse(Path::new("bench.yaml"), text).map_err(|e| e.to_string())?;
+    (seq.settings.width, seq.settings.height) = (width, height);
+    Ok(seq)
 }
 
 fn pool(threads: usize) -> Result<rayon::ThreadPool, String> {
@@ -354,8 +352,7 @@ fn scaling(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), Stri
     ));
     let mut scenes = Vec::new();
     for &n in counts {
-        let seq = sequence::parse(Path::new("field.yaml"), &field(n), &Overrides::default())
-            .map_err(|e| e.to_string())?;
+        let seq = sequence::parse(Path::new("field.yaml"), &field(n)).map_err(|e| e.to_string())?;
         let start = Instant::now();
         let world = World::new(seq.scene.clone());
         scenes.push((seq, world, start.elapsed().as_secs_f64()));

@@ -29,7 +29,10 @@ pub fn inside_warnings(seq: &Sequence) -> Vec<String> {
     let t = &seq.timeline;
     let objects = seq.scene.objects.len().max(1) as u64;
     let n = (INSIDE_BUDGET / objects).clamp(100, MAX_PATH_SAMPLES);
-    let frames = evenly_spaced(t.frame_count, n);
+    let frames: Vec<u64> = evenly_spaced(t.frame_count, n)
+        .into_iter()
+        .map(|f| f + t.first_frame())
+        .collect();
     let positions: Vec<DVec3> = frames.iter().map(|&f| t.pose_of(f).position).collect();
     let mut bad = vec![false; frames.len()];
     let mut warnings = Vec::new();

@@ -42,6 +42,7 @@ impl Plot {
         let t = &seq.timeline;
         let samples: Vec<(u64, Pose)> = evenly_spaced(t.frame_count, MAX_PATH_SAMPLES)
             .into_iter()
+            .map(|n| n + t.first_frame())
             .map(|n| (n, t.pose_of(n)))
             .collect();
         let (bad, warnings) = problems(seq, &samples);
