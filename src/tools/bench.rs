@@ -53,6 +53,18 @@ fn load(text: &str, (width, height): (u32, u32)) -> Result<Sequence, String> {
     Ok(seq)
 }
 
+/// A warning when other work already keeps at least half a core busy (the first field of
+/// `/proc/loadavg`, the 1-minute load average): every figure is then lower than this machine
+/// can do, and thread scaling flatter.
+fn busy_warning(loadavg: &str, cores: usize) -> Option<String> {
+    let load: f64 = loadavg.split_whitespace().next()?.parse().ok()?;
+    (load >= 0.5).then(|| {
+        format!(
+            "warning: the machine is busy (load average {load:.1} on {cores} cores before starting): figures will be lower and thread scaling flatter than this machine can do; rerun when it is idle"
+        )
+    })
+}
+
 fn pool(threads: usize) -> Result<rayon::ThreadPool, String> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -178,6 +190,10 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
         "each figure: median (min-max) of {} runs; reproduce with the command after it",
         o.runs
     ));
+    let loadavg = std::fs::read_to_string("/proc/loadavg").ok();
+    if let Some(w) = loadavg.as_deref().and_then(|l| busy_warning(l, cores)) {
+        out(&w);
+    }
     let talk = load(TALK, (w, h))?;
     let world = World::new(talk.scene.clone());
     let cmd = |name: &str| {
@@ -203,10 +219,14 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
         ));
         if want("threads") && cores > 1 {
             let (t1, _) = render_only(&world, &talk, 1, o.runs)?;
+            let speedup = t1.median / t2.median;
+            let busy = match speedup < 1.0 {
+                true => " (below 1x: other work had the cores; this says nothing of scaling)",
+                false => "",
+            };
             out(&format!(
-                "  1 thread: {:.1} frames/s; {cores} threads over 1: {:.2}x   [{}]",
+                "  1 thread: {:.1} frames/s; {cores} threads over 1: {speedup:.2}x{busy}   [{}]",
                 1.0 / t1.median,
-                t1.median / t2.median,
                 cmd("threads")
             ));
         }
@@ -467,4 +487,17 @@ fn today() -> String {
         .ok()
         .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
         .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_busy_machine_is_named() {
+        assert_eq!(busy_warning("0.12 0.30 0.40 1/200 999", 2), None);
+        let w = busy_warning("1.93 1.20 0.40 3/200 999", 2).unwrap();
+        assert!(w.contains("busy (load average 1.9 on 2 cores"), "{w}");
+        assert_eq!(busy_warning("garbage", 2), None);
+    }
 }
