@@ -15,7 +15,7 @@ use crate::sequence::Sequence;
 use crate::tracer::{self, Settings, World};
 use std::collections::BTreeMap;
 use std::io::Write;
-use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, mpsc};
 use std::time::{Duration, Instant};
 
@@ -411,7 +411,7 @@ pub fn frame_meta(seq: &Sequence, n: u64, run_hash: &fingerprint::Hasher) -> Fra
         frame: n,
         time: seq.timeline.time_of(n),
         fps: seq.timeline.fps,
-        fingerprint: fingerprint::of_frame(run_hash, &seq.timeline.pose_of(n)),
+        fingerprint: fingerprint::of_frame(run_hash, n, &seq.timeline.pose_of(n)),
     }
 }
 
@@ -497,48 +497,66 @@ impl StreamWriter {
     }
 }
 
-/// The first Ctrl-C (SIGINT) or SIGTERM, 0 before one comes.
-static SIGNAL: AtomicI32 = AtomicI32::new(0);
+/// Which signals came: set by signal-hook's handlers, which only store to atomics.
+struct Signals {
+    interrupt: Arc<AtomicBool>,
+    terminate: Arc<AtomicBool>,
+    any: Arc<AtomicBool>,
+}
 
+static SIGNALS: std::sync::OnceLock<Signals> = std::sync::OnceLock::new();
+
+/// Whether Ctrl-C (SIGINT) or SIGTERM came.
 pub fn interrupted() -> bool {
-    SIGNAL.load(Ordering::SeqCst) != 0
+    SIGNALS.get().is_some_and(|s| s.any.load(Ordering::SeqCst))
 }
 
 /// The exit code for the signal that came: 128 + its number (130 SIGINT, 143 SIGTERM).
 pub fn interrupt_code() -> u8 {
-    (128 + SIGNAL.load(Ordering::SeqCst)).clamp(0, 255) as u8
+    match signal_name() {
+        "SIGTERM" => 143,
+        _ => 130,
+    }
 }
 
 fn signal_name() -> &'static str {
-    match SIGNAL.load(Ordering::SeqCst) {
-        libc::SIGTERM => "SIGTERM",
+    let term = SIGNALS
+        .get()
+        .is_some_and(|s| s.terminate.load(Ordering::SeqCst));
+    let int = SIGNALS
+        .get()
+        .is_some_and(|s| s.interrupt.load(Ordering::SeqCst));
+    match (term, int) {
+        (true, false) => "SIGTERM",
         _ => "SIGINT",
     }
 }
 
 /// The first Ctrl-C or SIGTERM asks the run to stop: frames in flight are cancelled, the
 /// finished ones stay. A second one exits at once with 128 + its number (a later run removes
-/// any temporary file that leaves behind).
+/// any temporary file that leaves behind). Installed once per process.
 pub fn install_interrupt_handler() {
-    extern "C" fn on_signal(signal: libc::c_int) {
-        if SIGNAL
-            .compare_exchange(0, signal, Ordering::SeqCst, Ordering::SeqCst)
-            .is_err()
-        {
-            // SAFETY: _exit is async-signal-safe.
-            unsafe { libc::_exit(128 + signal) };
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    use signal_hook::flag;
+    SIGNALS.get_or_init(|| {
+        let s = Signals {
+            interrupt: Arc::new(AtomicBool::new(false)),
+            terminate: Arc::new(AtomicBool::new(false)),
+            any: Arc::new(AtomicBool::new(false)),
+        };
+        for (signal, seen) in [(SIGINT, &s.interrupt), (SIGTERM, &s.terminate)] {
+            // Handlers run in the order registered: the exit comes first, so it sees only a
+            // signal that came before this one.
+            let registered =
+                flag::register_conditional_shutdown(signal, 128 + signal, Arc::clone(&s.any))
+                    .and_then(|_| flag::register(signal, Arc::clone(seen)))
+                    .and_then(|_| flag::register(signal, Arc::clone(&s.any)));
+            if let Err(e) = registered {
+                eprintln!("rayreel: cannot handle signal {signal}: {e}");
+            }
         }
-    }
-    for signal in [libc::SIGINT, libc::SIGTERM] {
-        // SAFETY: installs a handler that only touches an atomic and calls _exit.
-        unsafe {
-            let mut action: libc::sigaction = std::mem::zeroed();
-            action.sa_sigaction = on_signal as *const () as usize;
-            action.sa_flags = libc::SA_RESTART;
-            libc::sigemptyset(&mut action.sa_mask);
-            libc::sigaction(signal, &action, std::ptr::null_mut());
-        }
-    }
+        s
+    });
 }
 
 /// Frame buffers are large and short-lived. glibc raises its mmap threshold after the first

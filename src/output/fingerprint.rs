@@ -6,8 +6,10 @@
 
 use crate::camera::Pose;
 use crate::output::FileFormat;
-use crate::scene::Scene;
-use crate::tracer::Settings;
+use crate::output::exr::Precision;
+use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
+use crate::tracer::{Adaptive, Sampler, Settings};
+use glam::DVec3;
 
 /// Key of the PNG text chunk and the EXR attribute that hold the fingerprint.
 pub const KEY: &str = "rayreel:fingerprint";
@@ -40,18 +42,307 @@ impl Default for Hasher {
     }
 }
 
-/// The part shared by every frame of a run: version, scene, settings and format. `Debug`
-/// prints every f64 in its shortest round-trip form, which makes it a canonical text.
+/// Names the encoding below; a change to it (a field added, an order changed) must change
+/// this name, so frames made under the old one count as stale rather than as the same job.
+pub const ENCODING: &str = "rayreel fingerprint v2";
+
+/// The part shared by every frame of a run: the renderer's version, then the scene, the
+/// render settings and the file content in the canonical encoding of `Canon`.
 pub fn of_run(scene: &Scene, settings: &Settings, format: &FileFormat) -> Hasher {
     let mut h = Hasher::new();
     h.write(concat!("rayreel ", env!("CARGO_PKG_VERSION"), "\n").as_bytes());
-    h.write(format!("{scene:?}\n{settings:?}\n{:?}\n", format.content()).as_bytes());
+    h.write(ENCODING.as_bytes());
+    scene.canon(&mut h);
+    settings.canon(&mut h);
+    format.canon(&mut h);
     h
 }
 
-/// The fingerprint of one frame: the run's hash extended with the frame's camera.
-pub fn of_frame(run: &Hasher, pose: &Pose) -> String {
+/// The fingerprint of one frame: the run's hash extended with the frame's number (its
+/// samples are seeded from it) and camera.
+pub fn of_frame(run: &Hasher, n: u64, pose: &Pose) -> String {
     let mut h = *run;
-    h.write(format!("{pose:?}").as_bytes());
+    n.canon(&mut h);
+    pose.canon(&mut h);
     h.hex()
+}
+
+/// The canonical encoding: every value as fixed-size little-endian bytes (an f64 as its
+/// IEEE-754 bits, so nothing depends on how numbers print), a list as its length then its
+/// items, an enum as a tag byte then its fields, a struct as its fields in declaration
+/// order. Structs are destructured whole, so a field added without being encoded here does
+/// not compile.
+pub trait Canon {
+    fn canon(&self, h: &mut Hasher);
+}
+
+impl Canon for f64 {
+    fn canon(&self, h: &mut Hasher) {
+        h.write(&self.to_bits().to_le_bytes());
+    }
+}
+
+impl Canon for f32 {
+    fn canon(&self, h: &mut Hasher) {
+        h.write(&self.to_bits().to_le_bytes());
+    }
+}
+
+impl Canon for u64 {
+    fn canon(&self, h: &mut Hasher) {
+        h.write(&self.to_le_bytes());
+    }
+}
+
+impl Canon for u32 {
+    fn canon(&self, h: &mut Hasher) {
+        h.write(&self.to_le_bytes());
+    }
+}
+
+impl Canon for usize {
+    fn canon(&self, h: &mut Hasher) {
+        (*self as u64).canon(h);
+    }
+}
+
+impl Canon for bool {
+    fn canon(&self, h: &mut Hasher) {
+        h.write(&[u8::from(*self)]);
+    }
+}
+
+impl Canon for DVec3 {
+    fn canon(&self, h: &mut Hasher) {
+        [self.x, self.y, self.z].iter().for_each(|v| v.canon(h));
+    }
+}
+
+impl<T: Canon> Canon for [T] {
+    fn canon(&self, h: &mut Hasher) {
+        self.len().canon(h);
+        self.iter().for_each(|v| v.canon(h));
+    }
+}
+
+impl<T: Canon> Canon for Option<T> {
+    fn canon(&self, h: &mut Hasher) {
+        match self {
+            None => {
+                h.write(&[0]);
+            }
+            Some(v) => {
+                h.write(&[1]);
+                v.canon(h);
+            }
+        }
+    }
+}
+
+/// A tag byte, then the fields.
+fn tagged(h: &mut Hasher, tag: u8, fields: &[&dyn Canon]) {
+    h.write(&[tag]);
+    fields.iter().for_each(|f| f.canon(h));
+}
+
+impl Canon for Scene {
+    fn canon(&self, h: &mut Hasher) {
+        let Scene {
+            objects,
+            materials,
+            lights,
+            background,
+        } = self;
+        objects[..].canon(h);
+        materials[..].canon(h);
+        lights[..].canon(h);
+        background.canon(h);
+    }
+}
+
+impl Canon for Object {
+    fn canon(&self, h: &mut Hasher) {
+        let Object { shape, material } = self;
+        match shape {
+            Shape::Sphere { center, radius } => tagged(h, 0, &[center, radius]),
+            Shape::Plane { point, normal } => tagged(h, 1, &[point, normal]),
+        }
+        material.canon(h);
+    }
+}
+
+impl Canon for Material {
+    fn canon(&self, h: &mut Hasher) {
+        let Material {
+            ambient,
+            diffuse,
+            specular,
+            exponent,
+            specular_floor,
+            reflection,
+        } = self;
+        let fields: [&dyn Canon; 6] = [
+            ambient,
+            diffuse,
+            specular,
+            exponent,
+            specular_floor,
+            reflection,
+        ];
+        fields.iter().for_each(|f| f.canon(h));
+    }
+}
+
+impl Canon for Intensity {
+    fn canon(&self, h: &mut Hasher) {
+        let Intensity {
+            ambient,
+            diffuse,
+            specular,
+        } = self;
+        [ambient, diffuse, specular].iter().for_each(|f| f.canon(h));
+    }
+}
+
+impl Canon for Light {
+    fn canon(&self, h: &mut Hasher) {
+        match self {
+            Light::Point {
+                position,
+                intensity,
+            } => tagged(h, 0, &[position, intensity]),
+            Light::Directional {
+                to_light,
+                intensity,
+            } => tagged(h, 1, &[to_light, intensity]),
+            Light::Spot {
+                position,
+                axis,
+                cos_inner,
+                cos_outer,
+                intensity,
+            } => tagged(h, 2, &[position, axis, cos_inner, cos_outer, intensity]),
+            Light::Ambient { color } => tagged(h, 3, &[color]),
+        }
+    }
+}
+
+impl Canon for Settings {
+    fn canon(&self, h: &mut Hasher) {
+        let Settings {
+            width,
+            height,
+            max_depth,
+            depth,
+            samples,
+            adaptive,
+            sampler,
+        } = self;
+        let fields: [&dyn Canon; 6] = [width, height, max_depth, depth, samples, adaptive];
+        fields.iter().for_each(|f| f.canon(h));
+        let tag = match sampler {
+            Sampler::Stratified => 0,
+            Sampler::Random => 1,
+        };
+        h.write(&[tag]);
+    }
+}
+
+impl Canon for Adaptive {
+    fn canon(&self, h: &mut Hasher) {
+        let Adaptive {
+            threshold,
+            max_samples,
+        } = self;
+        threshold.canon(h);
+        max_samples.canon(h);
+    }
+}
+
+/// What decides the decoded content; PNG compression only changes how it is packed.
+impl Canon for FileFormat {
+    fn canon(&self, h: &mut Hasher) {
+        match self {
+            FileFormat::Png { sixteen_bit, .. } => tagged(h, 0, &[sixteen_bit]),
+            FileFormat::Exr { precision } => {
+                let float = *precision == Precision::Float;
+                tagged(h, 1, &[&float])
+            }
+        }
+    }
+}
+
+impl Canon for Pose {
+    fn canon(&self, h: &mut Hasher) {
+        let Pose {
+            position,
+            look_at,
+            up,
+            fov,
+        } = self;
+        let fields: [&dyn Canon; 4] = [position, look_at, up, fov];
+        fields.iter().for_each(|f| f.canon(h));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pose(x: f64) -> Pose {
+        Pose {
+            position: DVec3::new(x, 0.0, 1.0),
+            look_at: DVec3::ZERO,
+            up: DVec3::Y,
+            fov: 90.0,
+        }
+    }
+
+    #[test]
+    fn the_encoding_is_what_the_readme_says() {
+        let settings = Settings {
+            width: 2,
+            height: 1,
+            max_depth: 3,
+            depth: false,
+            samples: 1,
+            adaptive: None,
+            sampler: Sampler::Stratified,
+        };
+        let scene = Scene {
+            objects: Vec::new(),
+            materials: Vec::new(),
+            lights: Vec::new(),
+            background: DVec3::ZERO,
+        };
+        let png = FileFormat::Png {
+            sixteen_bit: false,
+            compression: crate::output::png::Compression::Fast,
+        };
+        let run = of_run(&scene, &settings, &png);
+        let mut bytes = Vec::new();
+        bytes.extend(concat!("rayreel ", env!("CARGO_PKG_VERSION"), "\n").as_bytes());
+        bytes.extend(ENCODING.as_bytes());
+        bytes.extend([0u8; 24]); // three empty lists
+        bytes.extend([0u8; 24]); // background (0, 0, 0)
+        for v in [2u32, 1, 3] {
+            bytes.extend(v.to_le_bytes());
+        }
+        bytes.push(0); // depth
+        bytes.extend(1u32.to_le_bytes());
+        bytes.extend([0, 0]); // no adaptive, stratified
+        bytes.extend([0, 0]); // png, 8 bits
+        assert_eq!(run.hex(), Hasher::new().write(&bytes).hex());
+        // The frame's number and camera each change it; compression does not.
+        assert_ne!(of_frame(&run, 0, &pose(0.0)), of_frame(&run, 1, &pose(0.0)));
+        assert_ne!(
+            of_frame(&run, 0, &pose(0.0)),
+            of_frame(&run, 0, &pose(-0.0))
+        );
+        let best = FileFormat::Png {
+            sixteen_bit: false,
+            compression: crate::output::png::Compression::Best,
+        };
+        assert_eq!(run.hex(), of_run(&scene, &settings, &best).hex());
+    }
 }
