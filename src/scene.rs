@@ -19,6 +19,27 @@ pub struct Material {
     /// N·H at or below which the specular power is under 1e-30 and counts as 0.
     pub specular_floor: f64,
     pub reflection: f64,
+    /// The colour filter light passing through the surface is multiplied by; zero for an
+    /// opaque material.
+    pub transmission: DVec3,
+    /// Index of refraction of the medium behind the surface (inside a sphere, behind a plane),
+    /// at least 1; every other medium has index 1.
+    pub ior: f64,
+    /// Schlick's Fresnel term replaces `reflection` and scales `transmission`.
+    pub fresnel: bool,
+}
+
+impl Material {
+    /// Whether light passes through the surface.
+    pub fn transparent(&self) -> bool {
+        self.transmission != DVec3::ZERO
+    }
+
+    /// Whether a hit can spawn more than one ray (or a reflection that depends on the angle),
+    /// so paths become trees.
+    pub fn branches(&self) -> bool {
+        self.transparent() || self.fresnel
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -47,18 +47,34 @@ fn triple(v: DVec3) -> String {
 }
 
 /// A scene of `spheres` spheres (a hierarchy from 12 on) and `planes` planes, with materials
-/// mixing whole, fractional, zero and huge exponents and mirrors, and every light kind.
-fn scene(rng: &mut Rng, spheres: usize, planes: usize) -> String {
+/// mixing whole, fractional, zero and huge exponents and mirrors, and every light kind; with
+/// `glass`, most objects also transmit (fixed weights or Fresnel, ior 1 to 2.4, coloured).
+fn scene(rng: &mut Rng, spheres: usize, planes: usize, glass: bool) -> String {
     let mut s = String::from("objects:\n");
     let material = |rng: &mut Rng| {
-        format!(
-            "{{ ambient: {}, diffuse: {}, specular: {}, shininess: {}, reflection: {} }}",
+        let reflection = *rng.pick(&[0.0, 0.3, 0.5, 1.0]);
+        let mut m = format!(
+            "{{ ambient: {}, diffuse: {}, specular: {}, shininess: {}",
             triple(rng.vec(0.0, 0.2)),
             triple(rng.vec(0.0, 1.0)),
             triple(rng.vec(0.0, 1.0)),
             rng.pick(&[0.0, 1.0, 10.0, 37.5, 100.0, 101.0, 400.0, 1e5]),
-            rng.pick(&[0.0, 0.3, 0.5, 1.0]),
-        )
+        );
+        let ior = *rng.pick(&[1.0, 1.0, 1.33, 1.5, 2.4]);
+        match (glass, *rng.pick(&[0, 1, 2, 3])) {
+            (true, 1) => {
+                m += &format!(
+                    ", fresnel: true, transmission: {}, ior: {ior}",
+                    triple(rng.vec(0.3, 1.0))
+                )
+            }
+            (true, 2 | 3) => {
+                let t = rng.range(0.0, 1.0 - reflection);
+                m += &format!(", reflection: {reflection}, transmission: {t}, ior: {ior}");
+            }
+            _ => m += &format!(", reflection: {reflection}"),
+        }
+        m + " }"
     };
     for _ in 0..spheres {
         let (c, r) = (rng.vec(-3.0, 3.0), rng.range(0.05, 1.2));
@@ -188,11 +204,14 @@ fn every_width_traces_every_ray_as_the_scalar_kernel_does() {
         return;
     }
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-    for (case, (spheres, planes)) in [(3, 1), (6, 2), (1, 0), (0, 2), (40, 1), (200, 2)]
+    let cases = [(3, 1), (6, 2), (1, 0), (0, 2), (40, 1), (200, 2)];
+    let glass = [(4, 1), (2, 2), (1, 0), (30, 1)];
+    let cases = cases
+        .map(|c| (c, false))
         .into_iter()
-        .enumerate()
-    {
-        let text = scene(&mut rng, spheres, planes);
+        .chain(glass.map(|c| (c, true)));
+    for (case, ((spheres, planes), glass)) in cases.enumerate() {
+        let text = scene(&mut rng, spheres, planes, glass);
         let seq = sequence::parse(Path::new("random.yaml"), &text)
             .unwrap_or_else(|e| panic!("{e}\n{text}"));
         let world = World::new(seq.scene.clone());
@@ -278,12 +297,21 @@ fn frames_from_every_kernel_equal_the_scalar_kernels() {
     every_kernel_equals_scalar(&tmp, "final", &["--size", "161x90", "--quality", "final"]);
     every_kernel_equals_scalar(&tmp, "grid", &["--size", "97x55", "--samples", "9"]);
     let mut rng = Rng(7);
-    let field = scene(&mut rng, 60, 1).replace(
+    let field = scene(&mut rng, 60, 1, false).replace(
         "camera: { position: [0, 0, 10]",
         "render: { max_depth: 4 }\ncamera: { position: [0, 0, 10]",
     );
     std::fs::write(tmp.join("seq.yaml"), field).unwrap();
     every_kernel_equals_scalar(&tmp, "field", &["--size", "130x70", "--samples", "5"]);
+    let glass = scene(&mut rng, 20, 2, true).replace(
+        "camera: { position: [0, 0, 10]",
+        "render: { max_depth: 6 }\ncamera: { position: [0, 0, 10]",
+    );
+    std::fs::write(tmp.join("seq.yaml"), glass).unwrap();
+    every_kernel_equals_scalar(&tmp, "glass", &["--size", "120x66", "--samples", "5"]);
+    let glass_seq = std::fs::read_to_string(common::repo().join("sequences/glass.yaml")).unwrap();
+    std::fs::write(tmp.join("seq.yaml"), glass_seq).unwrap();
+    every_kernel_equals_scalar(&tmp, "glass.yaml", &["--size", "96x54", "--frames", "0,30"]);
     let out = run_in(&tmp, &["check", "seq.yaml"]);
     assert!(out.status.success(), "{}", stderr(&out));
 }

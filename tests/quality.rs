@@ -155,7 +155,7 @@ fn adaptive_matches_uniform_16_with_less_than_half_the_samples() {
 #[test]
 fn presets_trade_cost_for_accuracy_in_order() {
     let seq = orbit((160, 90));
-    let truth = measure::render(&seq, 0, &measure::reference_settings(&seq.settings))
+    let truth = measure::render(&seq, 0, &measure::reference_settings(&seq.settings, false))
         .unwrap()
         .to_rgb8();
     let mut last: Option<(u64, f64)> = None;

@@ -180,14 +180,20 @@ impl Canon for Material {
             exponent,
             specular_floor,
             reflection,
+            transmission,
+            ior,
+            fresnel,
         } = self;
-        let fields: [&dyn Canon; 6] = [
+        let fields: [&dyn Canon; 9] = [
             ambient,
             diffuse,
             specular,
             exponent,
             specular_floor,
             reflection,
+            transmission,
+            ior,
+            fresnel,
         ];
         fields.iter().for_each(|f| f.canon(h));
     }

@@ -80,8 +80,40 @@ pub struct Material {
     #[serde(default)]
     pub specular: V3,
     pub shininess: Option<f64>,
+    pub reflection: Option<f64>,
+    pub transmission: Option<Filter>,
+    pub ior: Option<f64>,
     #[serde(default)]
-    pub reflection: f64,
+    pub fresnel: bool,
+}
+
+/// A colour filter given as one number for every channel (`0.9`) or as a triple.
+#[derive(Debug, Clone, Copy)]
+pub struct Filter(pub V3);
+
+impl<'de> Deserialize<'de> for Filter {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct F;
+        impl<'de> Visitor<'de> for F {
+            type Value = Filter;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number in [0, 1] or a colour triple [r, g, b]")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Filter, E> {
+                Ok(Filter([v; 3]))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Filter, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Filter, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<Filter, A::Error> {
+                V3::deserialize(serde::de::value::SeqAccessDeserializer::new(seq)).map(Filter)
+            }
+        }
+        d.deserialize_any(F)
+    }
 }
 
 /// `materials:` keeps the user's order and rejects a name given twice (a plain map would

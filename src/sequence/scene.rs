@@ -24,12 +24,55 @@ pub(super) fn material(path: &str, m: &raw::Material) -> Check<Material> {
         )? / 4.0,
         reflection: in_range(
             &format!("{path}.reflection"),
-            m.reflection,
+            m.reflection.unwrap_or(0.0),
             0.0,
             1.0,
             "in [0, 1]",
         )?,
+        transmission: transmission(path, m)?,
+        ior: in_range(
+            &format!("{path}.ior"),
+            m.ior.unwrap_or(1.5),
+            1.0,
+            MAX_IOR,
+            &format!("in [1, {MAX_IOR}]"),
+        )?,
+        fresnel: m.fresnel,
     })
+}
+
+/// Glass refracts at most as much as diamond's 2.42 several times over; beyond this an index
+/// means nothing physical.
+const MAX_IOR: f64 = 100.0;
+
+/// The transmission filter: each channel in [0, 1], and with the reflection at most 1, since
+/// a surface cannot pass on more light than it receives (Fresnel shares it out itself).
+fn transmission(path: &str, m: &raw::Material) -> Check<DVec3> {
+    if m.fresnel && m.reflection.is_some() {
+        return invalid(
+            format!("{path}.reflection"),
+            "with `fresnel: true` the Fresnel term decides how much is reflected; remove `reflection`",
+        );
+    }
+    let field = format!("{path}.transmission");
+    let Some(raw::Filter(v)) = m.transmission else {
+        return Ok(DVec3::ZERO);
+    };
+    let t = vector(&field, v)?;
+    if t.min_element() < 0.0 || t.max_element() > 1.0 {
+        return invalid(&field, format!("must be in [0, 1] {}", got(fmt3(v))));
+    }
+    let r = m.reflection.unwrap_or(0.0);
+    if !m.fresnel && r + t.max_element() > 1.0 {
+        return invalid(
+            &field,
+            format!(
+                "reflection + transmission must not exceed 1 in any channel: a surface cannot pass on more light than it receives {}",
+                got(format!("{} + {}", num(r), fmt3(v)))
+            ),
+        );
+    }
+    Ok(t)
 }
 
 pub(super) fn material_ref(

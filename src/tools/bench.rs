@@ -245,6 +245,9 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
             cmd("reflections")
         ));
     }
+    if want("glass") {
+        glass(o, (w, h), &talk, &world, out, &cmd("glass"))?;
+    }
     if want("sequence") {
         let frames = if o.quick { 4 } else { 12 };
         let orbit = load(TALK_ORBIT, (w, h))?;
@@ -292,6 +295,41 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
 /// Every lane width this CPU has on the same frames, interleaved round by round so a busy
 /// machine slows them alike; each ratio is the median of the rounds' ratios to the scalar
 /// kernel. Also checks that every width wrote the same frame.
+/// What glass costs: the talk with its red sphere turned to Fresnel glass, against the talk.
+fn glass(
+    o: &Options,
+    (w, h): (u32, u32),
+    talk: &Sequence,
+    world: &World,
+    out: &mut dyn FnMut(&str),
+    cmd: &str,
+) -> Result<(), String> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let (tt, t) = render_only(world, talk, cores, o.runs)?;
+    for depth in [3, 8] {
+        let text = TALK
+            .replace(
+                "red:    { ambient: [0.1, 0, 0],     diffuse: [0.7, 0, 0],     specular: [1, 1, 1], shininess: 100, reflection: 0.5 }",
+                "red:    { diffuse: [0, 0, 0], specular: [1, 1, 1], shininess: 400, transmission: [0.95, 0.97, 1], fresnel: true }",
+            )
+            .replace("max_depth: 3", &format!("max_depth: {depth}"));
+        if !text.contains("transmission") {
+            return Err("bench: talk.yaml's red material changed; update the glass bench".into());
+        }
+        let glass = load(&text, (w, h))?;
+        let (tg, g) = render_only(&World::new(glass.scene.clone()), &glass, cores, o.runs)?;
+        out(&format!(
+            "talk with a glass red sphere, depth {depth}: {:.1} frames/s ({} rays) vs the talk: {:.1} frames/s ({} rays): {:.2}x the time   [{cmd}]",
+            1.0 / tg.median,
+            g.rays,
+            1.0 / tt.median,
+            t.rays,
+            tg.median / tt.median,
+        ));
+    }
+    Ok(())
+}
+
 fn kernels(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), String> {
     let kernels: Vec<Kernel> = Kernel::ALL.into_iter().filter(|k| k.supported()).collect();
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());

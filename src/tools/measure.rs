@@ -15,6 +15,10 @@ use std::time::Instant;
 /// r^15, deeper paths add nothing visible in practice; `convergence` reports the check.
 pub const REFERENCE_SAMPLES: u32 = 1024;
 pub const REFERENCE_DEPTH: u32 = 16;
+/// The reference where paths branch (glass): a tree of depth d traces up to 2^d − 1 rays a
+/// sample, so a 16×16 grid at depth 12 costs about what the plain reference does.
+pub const TREE_REFERENCE_SAMPLES: u32 = 256;
+pub const TREE_REFERENCE_DEPTH: u32 = 12;
 
 /// How far an image is from the reference, in 8-bit levels.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -74,11 +78,16 @@ pub fn render(seq: &Sequence, n: u64, settings: &Settings) -> Result<Frame, Stri
     render_with(&World::new(seq.scene.clone()), seq, n, settings)
 }
 
-pub fn reference_settings(base: &Settings) -> Settings {
+/// The reference `measure` compares against, for a scene whose paths are trees or not.
+pub fn reference_settings(base: &Settings, trees: bool) -> Settings {
+    let (samples, max_depth) = match trees {
+        false => (REFERENCE_SAMPLES, REFERENCE_DEPTH),
+        true => (TREE_REFERENCE_SAMPLES, TREE_REFERENCE_DEPTH),
+    };
     Settings {
-        samples: REFERENCE_SAMPLES,
+        samples,
         adaptive: None,
-        max_depth: REFERENCE_DEPTH,
+        max_depth,
         sampler: Sampler::Stratified,
         depth: false,
         ..*base
@@ -182,6 +191,8 @@ fn spread(mut t: Vec<f64>) -> [f64; 3] {
 }
 
 pub struct Report {
+    /// Samples per pixel and max_depth of the reference.
+    pub reference: (u32, u32),
     pub reference_seconds: f64,
     /// Error of a reference with half the samples, against the reference.
     pub convergence: Error,
@@ -196,15 +207,16 @@ pub fn measure(
     progress: &mut dyn FnMut(&str),
 ) -> Result<Report, String> {
     let world = World::new(seq.scene.clone());
-    let reference = reference_settings(&seq.settings);
+    let reference = reference_settings(&seq.settings, world.trees());
     let start = Instant::now();
     let ref_image = render_with(&world, seq, n, &reference)?.to_rgb8();
     let reference_seconds = start.elapsed().as_secs_f64();
     progress(&format!(
-        "reference: {REFERENCE_SAMPLES} spp, max_depth {REFERENCE_DEPTH}, {reference_seconds:.2} s"
+        "reference: {} spp, max_depth {}, {reference_seconds:.2} s",
+        reference.samples, reference.max_depth
     ));
     let half = Settings {
-        samples: REFERENCE_SAMPLES / 2,
+        samples: reference.samples / 2,
         ..reference
     };
     let convergence = compare(&render_with(&world, seq, n, &half)?.to_rgb8(), &ref_image);
@@ -224,6 +236,7 @@ pub fn measure(
         });
     }
     Ok(Report {
+        reference: (reference.samples, reference.max_depth),
         reference_seconds,
         convergence,
         rows,
@@ -303,7 +316,9 @@ impl Report {
             })
             .collect();
         format!(
-            "{{\n  \"reference\": {{\"samples_per_pixel\": {REFERENCE_SAMPLES}, \"max_depth\": {REFERENCE_DEPTH}, \"seconds\": {:.6}, \"half_samples_rmse\": {:.5}}},\n  \"rows\": [\n{}\n  ]\n}}\n",
+            "{{\n  \"reference\": {{\"samples_per_pixel\": {}, \"max_depth\": {}, \"seconds\": {:.6}, \"half_samples_rmse\": {:.5}}},\n  \"rows\": [\n{}\n  ]\n}}\n",
+            self.reference.0,
+            self.reference.1,
             self.reference_seconds,
             self.convergence.rmse,
             rows.join(",\n")

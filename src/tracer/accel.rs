@@ -84,9 +84,14 @@ pub struct Nearest<V: Lanes> {
 
 impl Geometry {
     pub fn new(objects: &[Object]) -> Geometry {
+        Geometry::subset(objects, |_| true)
+    }
+
+    /// The geometry of the objects `keep` accepts, under their indices in `objects`.
+    pub fn subset(objects: &[Object], keep: impl Fn(usize) -> bool) -> Geometry {
         let mut spheres = Vec::new();
         let mut planes = Vec::new();
-        for (i, o) in objects.iter().enumerate() {
+        for (i, o) in objects.iter().enumerate().filter(|(i, _)| keep(*i)) {
             let object = i as u32;
             match o.shape {
                 Shape::Sphere { center, radius } => spheres.push(Ball {

@@ -5,6 +5,7 @@
 //! so a frame is byte-identical whatever the thread count, order of work or lane width.
 
 pub mod accel;
+pub mod glass;
 pub mod intersect;
 pub mod kernel;
 pub mod lanes;
@@ -57,12 +58,43 @@ pub enum Sampler {
 pub struct World {
     pub scene: Scene,
     pub geometry: accel::Geometry,
+    /// What blocks shadow rays when some objects let light through: the opaque ones only.
+    opaque: Option<accel::Geometry>,
+    /// The objects that let light through, in file order (shadow rays multiply their
+    /// filters in this order).
+    clear: Vec<glass::Clear>,
+    /// Some material spawns more than one ray (or reflects by angle): paths are trees.
+    branches: bool,
 }
 
 impl World {
     pub fn new(scene: Scene) -> World {
         let geometry = accel::Geometry::new(&scene.objects);
-        World { scene, geometry }
+        let material = |i: usize| &scene.materials[scene.objects[i].material];
+        let clear: Vec<glass::Clear> = (0..scene.objects.len())
+            .filter(|&i| material(i).transparent())
+            .map(|i| glass::Clear::new(&scene.objects[i], i, material(i).transmission))
+            .collect();
+        let opaque = (!clear.is_empty())
+            .then(|| accel::Geometry::subset(&scene.objects, |i| !material(i).transparent()));
+        let branches = scene.materials.iter().any(|m| m.branches());
+        World {
+            scene,
+            geometry,
+            opaque,
+            clear,
+            branches,
+        }
+    }
+
+    /// Whether paths are trees (some material sends on two rays, or reflects by angle).
+    pub fn trees(&self) -> bool {
+        self.branches
+    }
+
+    /// The geometry shadow rays are blocked by.
+    fn blockers(&self) -> &accel::Geometry {
+        self.opaque.as_ref().unwrap_or(&self.geometry)
     }
 }
 

@@ -16,7 +16,7 @@ use glam::DVec3;
 
 /// Below this weight a reflection cannot change any output value (f32 colours, half-float
 /// EXRs and 16-bit PNGs alike), so the path ends rather than crawl through subnormals.
-const NEGLIGIBLE_WEIGHT: f64 = 1e-30;
+pub(super) const NEGLIGIBLE_WEIGHT: f64 = 1e-30;
 
 /// Exponents up to this are whole-number powers by repeated squaring; larger or fractional
 /// ones go through `libm::pow`.
@@ -54,6 +54,9 @@ pub fn trace_packet<V: Lanes>(
     max_depth: u32,
     rays: &mut u64,
 ) -> V3<V> {
+    if world.branches {
+        return super::glass::trace_tree(world, eye, max_depth, rays);
+    }
     let background = V3::splat(world.scene.background);
     let mut ray = eye.rays;
     let mut active = eye.active;
@@ -71,30 +74,69 @@ pub fn trace_packet<V: Lanes>(
         if !active.any() {
             break;
         }
-        let surface = Surface::gather(world, &hit);
-        let point = ray.origin + ray.dir * hit.t;
-        let normal = surface.normal(point, ray.dir);
-        let local = local(
-            world, &surface, point, normal, ray.dir, hit.object, active, rays,
-        );
-        color = V3::select(active, color + local * weight, color);
-        weight = weight * surface.reflection;
+        let at = shade_hit(world, &ray, &hit, rays);
+        color = V3::select(active, color + at.local * weight, color);
+        weight = weight * at.surface.reflection;
         active = active.andnot(weight.lt(V::splat(NEGLIGIBLE_WEIGHT)));
         if !active.any() || depth + 1 == max_depth {
             break;
         }
-        let bounce = ray.dir - normal * (V::splat(2.0) * ray.dir.dot(normal));
-        ray = Rays {
-            origin: point,
-            dir: bounce.normalize(),
-            leaving: hit.object,
-        };
+        ray = at.reflected(&ray, &hit);
     }
     color
 }
 
+/// A packet's hits, shaded: what the rays see there, and what the path needs to go on.
+pub(super) struct Shaded<'a, V: Lanes> {
+    pub surface: Surface<'a, V>,
+    pub point: V3<V>,
+    /// The unit normal, turned to face the incoming ray.
+    pub normal: V3<V>,
+    /// Lanes whose ray meets the surface from outside (its outward normal faces the ray).
+    pub entering: V::M,
+    /// The light the surface sends back: the local Blinn-Phong terms of every light.
+    pub local: V3<V>,
+}
+
+/// Shades the lanes `hit.hit` (at least one) of a packet.
+#[inline(always)]
+pub(super) fn shade_hit<'a, V: Lanes>(
+    world: &'a World,
+    ray: &Rays<V>,
+    hit: &Nearest<V>,
+    rays: &mut u64,
+) -> Shaded<'a, V> {
+    let surface = Surface::gather(world, hit);
+    let point = ray.origin + ray.dir * hit.t;
+    let (normal, entering) = surface.normal(point, ray.dir);
+    let local = local(
+        world, &surface, point, normal, ray.dir, hit.object, hit.hit, rays,
+    );
+    Shaded {
+        surface,
+        point,
+        normal,
+        entering,
+        local,
+    }
+}
+
+impl<V: Lanes> Shaded<'_, V> {
+    /// The mirror rays: from the hit point along d − 2(d·N)N, leaving the hit object.
+    #[inline(always)]
+    pub(super) fn reflected(&self, ray: &Rays<V>, hit: &Nearest<V>) -> Rays<V> {
+        let n = self.normal;
+        let bounce = ray.dir - n * (V::splat(2.0) * ray.dir.dot(n));
+        Rays {
+            origin: self.point,
+            dir: bounce.normalize(),
+            leaving: hit.object,
+        }
+    }
+}
+
 /// What shading needs to know about the objects the lanes hit.
-struct Surface<'a, V: Lanes> {
+pub(super) struct Surface<'a, V: Lanes> {
     /// Sphere lanes: the centre.
     center: V3<V>,
     /// Plane lanes: the unit normal.
@@ -103,11 +145,11 @@ struct Surface<'a, V: Lanes> {
     ambient: V3<V>,
     diffuse: V3<V>,
     specular: V3<V>,
-    reflection: V,
+    pub reflection: V,
     /// Each lane's material: one reference when every lane hit the same object (the common
     /// case, shaded with splatted constants), else one per lane.
-    materials: [&'a Material; 16],
-    shared: bool,
+    pub materials: [&'a Material; 16],
+    pub shared: bool,
 }
 
 impl<'a, V: Lanes> Surface<'a, V> {
@@ -168,12 +210,14 @@ impl<'a, V: Lanes> Surface<'a, V> {
         }
     }
 
-    /// The unit normal at `point`, turned to face the incoming ray.
+    /// The unit normal at `point`, turned to face the incoming ray, and the lanes whose ray
+    /// comes from outside (a sphere's outside, a plane's front).
     #[inline(always)]
-    fn normal(&self, point: V3<V>, dir: V3<V>) -> V3<V> {
+    fn normal(&self, point: V3<V>, dir: V3<V>) -> (V3<V>, V::M) {
         let sphere = (point - self.center).normalize();
         let n = V3::select(self.is_plane, self.plane_normal, sphere);
-        V3::select(n.dot(dir).gt(V::splat(0.0)), -n, n)
+        let inside = n.dot(dir).gt(V::splat(0.0));
+        (V3::select(inside, -n, n), V::M::first(V::N).andnot(inside))
     }
 
     /// max(0, N·H)^exponent per lane (see `specular_power`).
@@ -263,9 +307,13 @@ fn local<V: Lanes>(
             dir: to_light.normalize(),
             leaving: object,
         };
-        let open = facing.andnot(world.geometry.occluded(&shadow, distance, facing));
+        let open = facing.andnot(world.blockers().occluded(&shadow, distance, facing));
         if open.any() {
-            let term = scaled(scale, direct(s, &i, normal, to_light, n_dot_l, dir));
+            let mut term = direct(s, &i, normal, to_light, n_dot_l, dir);
+            if !world.clear.is_empty() {
+                term = term * super::glass::transmittance(world, &shadow, distance, open);
+            }
+            let term = scaled(scale, term);
             sum = V3::select(open, sum + term, sum);
         }
     }

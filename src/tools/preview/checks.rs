@@ -50,6 +50,11 @@ pub(super) fn inside_objects(seq: &Sequence, positions: &[DVec3]) -> Vec<(String
     }
     let mut out = Vec::new();
     for (i, o) in seq.scene.objects.iter().enumerate() {
+        // A camera in or behind glass looks through it (a slab's two planes always have the
+        // camera behind one of them).
+        if seq.scene.materials[o.material].transparent() {
+            continue;
+        }
         let (flags, what): (Vec<bool>, _) = match o.shape {
             // A sphere whose box misses every position's box cannot hold one.
             Shape::Sphere { center, radius } if !reach.grown(radius).contains(center) => continue,
