@@ -19,7 +19,7 @@ fn seq() -> String {
     sequence(160, 90, keys)
 }
 
-fn setup(name: &str) -> std::path::PathBuf {
+fn setup(name: &str) -> Scratch {
     let tmp = scratch(name);
     std::fs::write(tmp.join("seq.yaml"), seq()).unwrap();
     tmp
