@@ -13,6 +13,7 @@ pub mod progress;
 pub mod scene;
 pub mod schedule;
 pub mod sequence;
+pub mod signals;
 pub mod timeline;
 pub mod tools;
 pub mod tracer;
@@ -33,6 +34,9 @@ pub enum Error {
     /// Rendering or writing failed (exit 1).
     #[error("{0}")]
     Failed(String),
+    /// A run stopped short: a frame could not be rendered, encoded or written (exit 1).
+    #[error(transparent)]
+    Run(#[from] schedule::RunError),
     /// `status` found frames that are not up to date (exit 1).
     #[error("{0}")]
     Incomplete(String),
@@ -45,7 +49,7 @@ impl Error {
     pub fn exit_code(&self) -> u8 {
         match self {
             Error::Load(_) | Error::Usage(_) => 2,
-            Error::Failed(_) | Error::Incomplete(_) => 1,
+            Error::Failed(_) | Error::Run(_) | Error::Incomplete(_) => 1,
             Error::Interrupted(_, code) => *code,
         }
     }

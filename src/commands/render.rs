@@ -10,7 +10,7 @@ use crate::frameset::FrameSet;
 use crate::output::{self, stream::StreamFormat};
 use crate::plan::{self, Plan, State};
 use crate::progress::Progress;
-use crate::schedule::{self, Files, Job, Outcome, Task};
+use crate::schedule::{self, Files, Job, Outcome, RunError, Task};
 use crate::sequence::Sequence;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -100,7 +100,7 @@ fn workers(asked: Option<u16>) -> Result<(rayon::ThreadPool, usize), Error> {
         Some(_) => Error::Usage(format!(
             "--threads {threads}: {e}; this machine has {cores} cores, and more threads than cores do not render faster"
         )),
-        None => Error::Failed(e),
+        None => Error::Run(e),
     })?;
     Ok((pool, threads))
 }
@@ -111,7 +111,7 @@ fn run_job(
     job: Job,
     frames: &FrameSet,
     progress: &mut Progress,
-) -> Result<Result<Outcome, String>, Error> {
+) -> Result<Result<Outcome, RunError>, Error> {
     let mut written = FrameSet::new();
     job.tasks
         .iter()
@@ -185,7 +185,7 @@ fn cooperate(
     mut job: Job,
     frames: &FrameSet,
     progress: &mut Progress,
-) -> Result<Outcome, String> {
+) -> Result<Outcome, RunError> {
     let mut written = 0;
     let mut told: Option<Instant> = None;
     loop {
@@ -371,11 +371,11 @@ fn interrupted_summary(
 }
 
 fn finish(
-    outcome: Result<Outcome, String>,
+    outcome: Result<Outcome, RunError>,
     plan: Option<&Plan>,
     streaming: bool,
 ) -> Result<(), Error> {
-    match outcome.map_err(Error::Failed)? {
+    match outcome? {
         Outcome::Complete { .. } => {
             let blocked = plan.map(Plan::blocked).unwrap_or_default();
             if blocked.is_empty() {
