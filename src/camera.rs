@@ -1,4 +1,4 @@
-//! A pinhole camera: `world_from_camera` and primary rays.
+//! The camera: `world_from_camera`, primary rays, and a thin lens for depth of field.
 //!
 //! Pixel (row i from the top, column j from the left) of a W×H image looks through the screen
 //! point x = −1 + 2(j+u)/W, y = (1 − 2(i+v)/H)·H/W, with (u, v) = (0.5, 0.5) at the pixel
@@ -34,6 +34,14 @@ pub enum Degenerate {
     Flip,
 }
 
+/// A thin lens: its aperture (diameter) and the distance from the camera to the plane in
+/// focus, both in scene units. Aperture 0 is a pinhole, for which the focus does not matter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lens {
+    pub aperture: f64,
+    pub focus_distance: f64,
+}
+
 /// An orthonormal camera frame, ready to make rays.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Camera {
@@ -41,7 +49,10 @@ pub struct Camera {
     pub forward: DVec3,
     pub right: DVec3,
     pub up: DVec3,
-    tan_half_fov: f64,
+    pub tan_half_fov: f64,
+    /// Half the aperture (0: a pinhole) and the focus distance along `forward`.
+    pub lens_radius: f64,
+    pub focus_distance: f64,
 }
 
 /// Below this sine of the angle between up and the view direction the roll is numerically
@@ -73,7 +84,18 @@ impl Camera {
             up,
             // libm, not the platform's: the same bits on every machine.
             tan_half_fov: libm::tan(pose.fov.to_radians() * 0.5),
+            lens_radius: 0.0,
+            focus_distance: length,
         })
+    }
+
+    /// This camera seen through `lens`.
+    pub fn with_lens(self, lens: Lens) -> Camera {
+        Camera {
+            lens_radius: 0.5 * lens.aperture,
+            focus_distance: lens.focus_distance,
+            ..self
+        }
     }
 
     /// 3×3 rotation (columns right, up, −forward) and translation to world space.

@@ -5,6 +5,7 @@ pub mod camera;
 pub mod claim;
 pub mod cli;
 pub mod console;
+pub mod exposure;
 pub mod frame;
 pub mod frameset;
 pub mod output;

@@ -4,8 +4,8 @@
 //! of the sequence or with a slow reader. Workers only compute (render, encode); this thread
 //! does all I/O: atomic file writes as frames finish, the stream strictly in frame order.
 
-use crate::camera::Camera;
 use crate::claim::{Attempt, Claims};
+use crate::exposure::Exposure;
 use crate::frame::Frame;
 use crate::output::{
     self, FileFormat, FrameMeta, fingerprint, pattern::Pattern, stream::StreamFormat,
@@ -109,7 +109,7 @@ pub enum RunError {
     #[error("frame {frame}: {source}")]
     Camera {
         frame: u64,
-        source: crate::camera::Degenerate,
+        source: crate::exposure::NoCamera,
     },
     #[error("{}: cannot encode: {message}", path.display())]
     Encode {
@@ -404,9 +404,9 @@ pub fn render_with(
     n: u64,
     settings: &Settings,
 ) -> Result<Frame, RunError> {
-    let pose = seq.timeline.pose_of(n);
-    let camera = Camera::new(&pose).map_err(|source| RunError::Camera { frame: n, source })?;
-    Ok(tracer::render(world, &camera, settings, n))
+    let exposure = Exposure::of_frame(&seq.timeline, settings.shutter, n)
+        .map_err(|source| RunError::Camera { frame: n, source })?;
+    Ok(tracer::render(world, &exposure, settings, n))
 }
 
 /// A worker's whole job for one frame: render, then encode for each sink that wants it;
@@ -421,9 +421,9 @@ fn produce(
 ) -> Produced {
     let start = Instant::now();
     let n = task.frame;
-    let camera = Camera::new(&seq.timeline.pose_of(n))
+    let exposure = Exposure::of_frame(&seq.timeline, seq.settings.shutter, n)
         .map_err(|source| RunError::Camera { frame: n, source })?;
-    let Some(frame) = tracer::render_or_stop(world, &camera, &seq.settings, n, cancel) else {
+    let Some(frame) = tracer::render_or_stop(world, &exposure, &seq.settings, n, cancel) else {
         return Ok(None);
     };
     let file = match files.filter(|_| task.write_file) {
@@ -457,7 +457,7 @@ pub fn frame_meta(seq: &Sequence, n: u64, run_hash: &fingerprint::Hasher) -> Fra
         frame: n,
         time: seq.timeline.time_of(n),
         fps: seq.timeline.fps,
-        fingerprint: fingerprint::of_frame(run_hash, n, &seq.timeline.pose_of(n)),
+        fingerprint: fingerprint::of_frame(run_hash, n, &seq.timeline, seq.settings.shutter),
     }
 }
 

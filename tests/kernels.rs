@@ -316,6 +316,60 @@ fn frames_from_every_kernel_equal_the_scalar_kernels() {
     assert!(out.status.success(), "{}", stderr(&out));
 }
 
+/// Motion blur and depth of field give each lane its own camera, instant and lens point.
+#[test]
+fn blurred_and_defocused_frames_from_every_kernel_equal_the_scalar_kernels() {
+    let tmp = scratch("kernels-film");
+    let read = |name: &str| std::fs::read_to_string(common::repo().join(name)).unwrap();
+    let talk = read("sequences/talk.yaml");
+    let lens = "camera:\n  aperture: 0.08\n  focus_distance: 0.9\n";
+    std::fs::write(tmp.join("seq.yaml"), talk.replacen("camera:\n", lens, 1)).unwrap();
+    every_kernel_equals_scalar(&tmp, "lens", &["--size", "97x55", "--samples", "5"]);
+    let flyby = read("sequences/flyby.yaml");
+    std::fs::write(tmp.join("seq.yaml"), &flyby).unwrap();
+    let frames = ["--frames", "20,100"];
+    let film = |args: &[&'static str]| [&frames[..], args].concat();
+    every_kernel_equals_scalar(
+        &tmp,
+        "film-grid",
+        &film(&["--size", "97x55", "--samples", "4"]),
+    );
+    every_kernel_equals_scalar(
+        &tmp,
+        "film-r2",
+        &film(&["--size", "81x46", "--samples", "3"]),
+    );
+    every_kernel_equals_scalar(
+        &tmp,
+        "film-final",
+        &film(&["--size", "65x37", "--quality", "final"]),
+    );
+    // A lens opening from a pinhole at frame 0: lanes of one packet with and without a lens.
+    let opening = flyby
+        .replacen("aperture: 0.04 }", "aperture: 0 }", 1)
+        .replacen("fov: 65 }", "fov: 65, aperture: 0.08 }", 1);
+    assert_ne!(opening, flyby);
+    std::fs::write(tmp.join("seq.yaml"), opening).unwrap();
+    every_kernel_equals_scalar(
+        &tmp,
+        "opening",
+        &["--size", "97x55", "--frames", "0-1", "--samples", "4"],
+    );
+    let orbit = read("sequences/orbit.yaml");
+    std::fs::write(tmp.join("seq.yaml"), orbit).unwrap();
+    every_kernel_equals_scalar(
+        &tmp,
+        "orbit",
+        &["--size", "97x55", "--frames", "5", "--depth"],
+    );
+    let glass = read("sequences/glass.yaml")
+        .replacen("  samples: 4\n", "  samples: 4\n  shutter: 180\n", 1)
+        .replacen("  fov: 70\n", "  fov: 70\n  aperture: 0.05\n", 1);
+    assert!(glass.contains("shutter: 180") && glass.contains("aperture: 0.05"));
+    std::fs::write(tmp.join("seq.yaml"), glass).unwrap();
+    every_kernel_equals_scalar(&tmp, "glass", &["--size", "96x54", "--frames", "0,30"]);
+}
+
 /// The wide kernels are generic code inlined into `#[target_feature]` functions; anything on
 /// that path the compiler cannot inline (a closure doing lane arithmetic, for instance) turns
 /// each SIMD instruction into a call and the kernel several times slower while every test

@@ -8,15 +8,7 @@ use std::process::{Command, Stdio};
 use std::time::Duration;
 
 fn seq() -> String {
-    let keys = "timeline:
-  fps: 12
-  interpolation: linear
-  keyframes:
-    - { time: 0, position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }
-    - { time: 2, position: [1.5, 0.4, 0.5] }
-    - { time: 4, position: [0, 0.5, -2.5] }
-";
-    sequence(160, 90, keys)
+    sequence(160, 90, THREE_KEYS)
 }
 
 fn setup(name: &str) -> Scratch {

@@ -41,10 +41,9 @@ pub fn camera(args: CameraArgs) -> Result<(), Error> {
 /// Frame n as one CSV or JSON line.
 fn line(seq: &Sequence, n: u64, format: CameraFormat) -> String {
     let t = seq.timeline.time_of(n);
-    let pose = seq.timeline.camera_at(t);
+    let (pose, lens) = seq.timeline.view_at(t);
     let speed = seq.timeline.speed_at(t);
-    // What depth of field will focus on by default.
-    let focus = pose.position.distance(pose.look_at);
+    let focus = lens.focus_distance;
     let (position, look_at, up) = (pose.position, pose.look_at, pose.up);
     match format {
         CameraFormat::Csv => {

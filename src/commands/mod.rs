@@ -193,7 +193,7 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
     };
     let s = &seq.settings;
     format!(
-        "{file}: ok\n  objects:    {} ({}, {})\n  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  frames:     {} at {} fps ({} s{}), {camera}\n{}  output:     {}\n",
+        "{file}: ok\n  objects:    {} ({}, {})\n  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  frames:     {} at {} fps ({} s{}), {camera}\n{}{}  output:     {}\n",
         scene.objects.len(),
         noun(spheres as f64, "sphere"),
         noun(planes as f64, "plane"),
@@ -215,6 +215,7 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
             first => format!(", frames {first}-{}", t.last_frame()),
         },
         timing(t),
+        film(seq),
         printable(&seq.output)
     )
 }
@@ -226,6 +227,30 @@ fn noun(n: f64, what: &str) -> String {
         sequence::num(n),
         if n == 1.0 { "" } else { "s" }
     )
+}
+
+/// The `film:` line when frames are more than a pinhole's instant: a shutter, an open lens.
+fn film(seq: &Sequence) -> String {
+    let widest = match &seq.timeline.path {
+        TimelinePath::Orbit(o) => o.aperture,
+        TimelinePath::Keys(k) => k.keys.iter().map(|k| k.aperture).fold(0.0, f64::max),
+    };
+    let mut parts = Vec::new();
+    if let Some(s) = seq.settings.shutter {
+        parts.push(format!(
+            "{}° shutter (open {:.4} s a frame, offset {})",
+            sequence::num(s.angle),
+            s.angle / 360.0 / seq.timeline.fps,
+            sequence::num(s.offset)
+        ));
+    }
+    if widest > 0.0 {
+        parts.push(format!("lens aperture up to {}", sequence::num(widest)));
+    }
+    if parts.is_empty() {
+        return String::new();
+    }
+    format!("  film:       {}\n", parts.join(", "))
 }
 
 /// The `timing:` line of a keyframed move: stops, or what constant speed does to key times.

@@ -4,10 +4,12 @@
 //! attribute), so a frame describes itself wherever it is copied, and shards on a shared
 //! directory need no common manifest.
 
-use crate::camera::Pose;
+use crate::camera::{Camera, Pose};
+use crate::exposure::{Exposure, Shutter};
 use crate::output::FileFormat;
 use crate::output::exr::Precision;
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
+use crate::timeline::Timeline;
 use crate::tracer::{Adaptive, Sampler, Settings};
 use glam::DVec3;
 
@@ -59,11 +61,23 @@ pub fn of_run(scene: &Scene, settings: &Settings, format: &FileFormat) -> Hasher
 }
 
 /// The fingerprint of one frame: the run's hash extended with the frame's number (its
-/// samples are seeded from it) and camera.
-pub fn of_frame(run: &Hasher, n: u64, pose: &Pose) -> String {
+/// samples are seeded from it), its camera at the frame time, and what its exposure adds: the
+/// lens when open, and the camera at every instant of the shutter's open interval when the
+/// camera moves while it is open (a still camera gives the same image with a shutter or
+/// without, and the same fingerprint).
+pub fn of_frame(run: &Hasher, n: u64, timeline: &Timeline, shutter: Option<Shutter>) -> String {
     let mut h = *run;
     n.canon(&mut h);
-    pose.canon(&mut h);
+    timeline.pose_of(n).canon(&mut h);
+    match Exposure::of_frame(timeline, shutter, n) {
+        Ok(e) => {
+            let lens = (e.camera.lens_radius > 0.0)
+                .then_some([e.camera.lens_radius, e.camera.focus_distance]);
+            tagged(&mut h, 0, &[&lens, &e.instants]);
+        }
+        // Never rendered: the run stops on it.
+        Err(_) => tagged(&mut h, 1, &[]),
+    }
     h.hex()
 }
 
@@ -125,6 +139,18 @@ impl<T: Canon> Canon for [T] {
     }
 }
 
+impl<T: Canon> Canon for Vec<T> {
+    fn canon(&self, h: &mut Hasher) {
+        self[..].canon(h);
+    }
+}
+
+impl<T: Canon, const N: usize> Canon for [T; N] {
+    fn canon(&self, h: &mut Hasher) {
+        self.iter().for_each(|v| v.canon(h));
+    }
+}
+
 impl<T: Canon> Canon for Option<T> {
     fn canon(&self, h: &mut Hasher) {
         match self {
@@ -153,9 +179,9 @@ impl Canon for Scene {
             lights,
             background,
         } = self;
-        objects[..].canon(h);
-        materials[..].canon(h);
-        lights[..].canon(h);
+        objects.canon(h);
+        materials.canon(h);
+        lights.canon(h);
         background.canon(h);
     }
 }
@@ -243,6 +269,9 @@ impl Canon for Settings {
             samples,
             adaptive,
             sampler,
+            // Enters through each frame's cameras (`of_frame`), so a frame whose camera holds
+            // still while the shutter is open keeps its fingerprint.
+            shutter: _,
         } = self;
         let fields: [&dyn Canon; 6] = [width, height, max_depth, depth, samples, adaptive];
         fields.iter().for_each(|f| f.canon(h));
@@ -291,17 +320,49 @@ impl Canon for Pose {
     }
 }
 
+impl Canon for Camera {
+    fn canon(&self, h: &mut Hasher) {
+        let Camera {
+            origin,
+            forward,
+            right,
+            up,
+            tan_half_fov,
+            lens_radius,
+            focus_distance,
+        } = self;
+        let fields: [&dyn Canon; 7] = [
+            origin,
+            forward,
+            right,
+            up,
+            tan_half_fov,
+            lens_radius,
+            focus_distance,
+        ];
+        fields.iter().for_each(|f| f.canon(h));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn pose(x: f64) -> Pose {
-        Pose {
+    /// A still camera at (x, 0, 1) looking at the origin, with a lens of `aperture`.
+    fn still(x: f64, aperture: f64) -> Timeline {
+        let pose = Pose {
             position: DVec3::new(x, 0.0, 1.0),
             look_at: DVec3::ZERO,
             up: DVec3::Y,
             fov: 90.0,
-        }
+        };
+        Timeline::still(crate::timeline::Key {
+            time: 0.0,
+            pose,
+            ease: crate::timeline::Ease::Pass,
+            aperture,
+            focus_distance: None,
+        })
     }
 
     #[test]
@@ -314,6 +375,7 @@ mod tests {
             samples: 1,
             adaptive: None,
             sampler: Sampler::Stratified,
+            shutter: None,
         };
         let scene = Scene {
             objects: Vec::new(),
@@ -339,12 +401,17 @@ mod tests {
         bytes.extend([0, 0]); // no adaptive, stratified
         bytes.extend([0, 0]); // png, 8 bits
         assert_eq!(run.hex(), Hasher::new().write(&bytes).hex());
-        // The frame's number and camera each change it; compression does not.
-        assert_ne!(of_frame(&run, 0, &pose(0.0)), of_frame(&run, 1, &pose(0.0)));
-        assert_ne!(
-            of_frame(&run, 0, &pose(0.0)),
-            of_frame(&run, 0, &pose(-0.0))
-        );
+        // The frame's number, camera and lens each change it; a shutter on a still camera
+        // and the compression do not.
+        let at = |x, aperture, n, shutter| of_frame(&run, n, &still(x, aperture), shutter);
+        let open = Some(Shutter {
+            angle: 180.0,
+            offset: 0.0,
+        });
+        assert_ne!(at(0.0, 0.0, 0, None), at(0.0, 0.0, 1, None));
+        assert_ne!(at(0.0, 0.0, 0, None), at(-0.0, 0.0, 0, None));
+        assert_ne!(at(0.0, 0.0, 0, None), at(0.0, 0.1, 0, None));
+        assert_eq!(at(0.0, 0.0, 0, None), at(0.0, 0.0, 0, open));
         let best = FileFormat::Png {
             sixteen_bit: false,
             compression: crate::output::png::Compression::Best,

@@ -26,9 +26,10 @@ pub use settings::{DEFAULT_MAX_SAMPLES, DEFAULT_THRESHOLD, MAX_SAMPLES, escapes,
 pub use timeline::MAX_FIRST_FRAME;
 
 use crate::camera::{Camera, Degenerate, Pose};
+use crate::exposure::Shutter;
 use crate::output::{atomic, pattern::Pattern};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
-use crate::timeline::Timeline;
+use crate::timeline::{Ease, Key, Timeline};
 use crate::tracer::{Adaptive, Sampler, Settings};
 use glam::DVec3;
 pub use raw::Quality;
@@ -261,11 +262,11 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<(Sequence, Option<Invalid>)
     for (i, l) in raw.lights.iter().enumerate() {
         lights.push(light(&format!("lights[{i}]"), l)?);
     }
-    let camera = raw.camera.as_ref().map(camera_pose).transpose()?;
+    let camera = raw.camera.as_ref().map(camera_key).transpose()?;
     let loaded = match (&raw.timeline, camera) {
-        (Some(t), camera) => timeline::timeline(t, camera)?,
-        (None, Some(pose)) => timeline::Loaded {
-            timeline: Timeline::still(pose),
+        (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
+        (None, Some(key)) => timeline::Loaded {
+            timeline: Timeline::still(key),
             warnings: Vec::new(),
             problem: None,
         },
@@ -306,7 +307,8 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<(Sequence, Option<Invalid>)
     Ok((seq, loaded.problem))
 }
 
-fn camera_pose(c: &raw::Camera) -> Check<Pose> {
+/// `camera:` as a key at time 0: a still camera, or what the first keyframe starts from.
+fn camera_key(c: &raw::Camera) -> Check<Key> {
     let pose = Pose {
         position: vector("camera.position", c.position)?,
         look_at: vector("camera.look_at", c.look_at)?,
@@ -314,7 +316,44 @@ fn camera_pose(c: &raw::Camera) -> Check<Pose> {
         fov: fov("camera.fov", c.fov.unwrap_or(90.0))?,
     };
     check_pose("camera", &pose)?;
-    Ok(pose)
+    Ok(Key {
+        time: 0.0,
+        pose,
+        ease: Ease::Pass,
+        aperture: aperture("camera.aperture", c.aperture.unwrap_or(0.0))?,
+        focus_distance: c
+            .focus_distance
+            .map(|f| focus_distance("camera.focus_distance", f))
+            .transpose()?,
+    })
+}
+
+/// A lens diameter: 0 (a pinhole) or more.
+fn aperture(path: &str, v: f64) -> Check<f64> {
+    if number(path, v)? < 0.0 {
+        return invalid(
+            path,
+            format!(
+                "must be 0 (a pinhole) or a positive lens diameter {}",
+                got_num(v)
+            ),
+        );
+    }
+    Ok(v)
+}
+
+/// A distance in focus, along the view axis.
+fn focus_distance(path: &str, v: f64) -> Check<f64> {
+    if number(path, v)? <= 0.0 {
+        return invalid(
+            path,
+            format!(
+                "must be a distance greater than 0 from the camera to the plane in focus {}",
+                got_num(v)
+            ),
+        );
+    }
+    Ok(v)
 }
 
 /// `path` is the mapping holding the pose; the error names the field to change.

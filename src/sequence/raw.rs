@@ -35,6 +35,8 @@ pub struct Render {
     pub adaptive: Option<Adaptive>,
     pub quality: Option<Quality>,
     pub sampler: Option<Sampler>,
+    pub shutter: Option<f64>,
+    pub shutter_offset: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -69,6 +71,8 @@ pub struct Camera {
     pub look_at: V3,
     pub up: Option<V3>,
     pub fov: Option<f64>,
+    pub aperture: Option<f64>,
+    pub focus_distance: Option<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -280,6 +284,8 @@ pub struct Keyframe {
     pub look_at: Option<V3>,
     pub up: Option<V3>,
     pub fov: Option<f64>,
+    pub aperture: Option<f64>,
+    pub focus_distance: Option<f64>,
     /// A string rather than an enum, so that the eases of earlier versions get a message
     /// saying what replaces them.
     pub ease: Option<String>,

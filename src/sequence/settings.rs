@@ -16,6 +16,7 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
             Some(raw::Sampler::Random) => Sampler::Random,
             _ => Sampler::Stratified,
         },
+        shutter: shutter(r)?,
     };
     pixels(s.width, s.height).or_else(|m| invalid("render.width", m))?;
     if let Some(q) = r.quality {
@@ -64,6 +65,25 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
         );
     }
     Ok(s)
+}
+
+/// `render.shutter` and `render.shutter_offset`; None when the shutter angle is 0.
+fn shutter(r: &raw::Render) -> Check<Option<Shutter>> {
+    let angle = in_range(
+        "render.shutter",
+        r.shutter.unwrap_or(0.0),
+        0.0,
+        360.0,
+        "an angle in [0, 360] degrees (0: no motion blur, 180: film)",
+    )?;
+    let offset = in_range(
+        "render.shutter_offset",
+        r.shutter_offset.unwrap_or(0.0),
+        -0.5,
+        0.5,
+        "in [-0.5, 0.5] (0: open interval centred on the frame time, 0.5: opening at it, -0.5: closing at it)",
+    )?;
+    Ok((angle > 0.0).then_some(Shutter { angle, offset }))
 }
 
 /// Default `render.adaptive.threshold`: a linear colour difference of about 8/255.

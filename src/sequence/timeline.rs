@@ -2,10 +2,11 @@
 //! timeline can still deserve, and the check of every frame's camera.
 
 use super::{
-    Check, Invalid, MAX_FPS, MAX_FRAMES, MAX_ROLL_PER_FRAME_DEGREES, fov, got, got_num, in_range,
-    invalid, num, number, positive, raw, unit, vector,
+    Check, Invalid, MAX_FPS, MAX_FRAMES, MAX_ROLL_PER_FRAME_DEGREES, aperture, focus_distance, fov,
+    got, got_num, in_range, invalid, num, number, positive, raw, unit, vector,
 };
 use crate::camera::{Camera, Degenerate, Pose};
+use crate::exposure::{INSTANTS, Shutter};
 use crate::timeline::{
     Clock, Ease, Interpolation, Key, Keyed, Orbit, Path as TimelinePath, Speed, Timeline, frames_to,
 };
@@ -22,7 +23,11 @@ pub(super) struct Loaded {
     pub problem: Option<Invalid>,
 }
 
-pub(super) fn timeline(t: &raw::Timeline, camera: Option<Pose>) -> Check<Loaded> {
+pub(super) fn timeline(
+    t: &raw::Timeline,
+    camera: Option<Key>,
+    shutter: Option<Shutter>,
+) -> Check<Loaded> {
     let (fps, fraction) = match t.fps.unwrap_or(raw::Fps::Number(24.0)) {
         raw::Fps::Number(fps) => (fps, None),
         raw::Fps::Fraction(num, den) => (num as f64 / den as f64, Some((num, den))),
@@ -61,7 +66,7 @@ pub(super) fn timeline(t: &raw::Timeline, camera: Option<Pose>) -> Check<Loaded>
         .duration
         .map_or_else(Vec::new, |d| unseen_keys(&timeline, d));
     let problem = check_keys(&timeline)
-        .and_then(|()| check_every_frame(&timeline))
+        .and_then(|()| check_every_frame(&timeline, shutter))
         .err();
     Ok(Loaded {
         timeline,
@@ -70,7 +75,7 @@ pub(super) fn timeline(t: &raw::Timeline, camera: Option<Pose>) -> Check<Loaded>
     })
 }
 
-fn path(t: &raw::Timeline, camera: Option<Pose>) -> Check<TimelinePath> {
+fn path(t: &raw::Timeline, camera: Option<Key>) -> Check<TimelinePath> {
     match (&t.keyframes, &t.orbit) {
         (Some(_), Some(_)) => invalid(
             "timeline.orbit",
@@ -200,7 +205,7 @@ fn unseen_keys(t: &Timeline, duration: f64) -> Vec<String> {
     )]
 }
 
-fn keyframes(keys: &[raw::Keyframe], camera: Option<Pose>) -> Check<Vec<Key>> {
+fn keyframes(keys: &[raw::Keyframe], camera: Option<Key>) -> Check<Vec<Key>> {
     if keys.is_empty() {
         return invalid("timeline.keyframes", "needs at least one keyframe");
     }
@@ -221,10 +226,24 @@ fn keyframes(keys: &[raw::Keyframe], camera: Option<Pose>) -> Check<Vec<Key>> {
                 ),
             );
         }
-        let before = out.last().map(|k| k.pose).or(camera);
-        let pose = key_pose(&path, k, before)?;
+        let before = out.last().copied().or(camera);
+        let pose = key_pose(&path, k, before.map(|b| b.pose))?;
         let ease = ease(&path, i, keys.len(), k.ease.as_deref())?;
-        out.push(Key { time, pose, ease });
+        let aperture = match k.aperture {
+            Some(a) => aperture(&format!("{path}.aperture"), a)?,
+            None => before.map_or(0.0, |b| b.aperture),
+        };
+        let focus_distance = match k.focus_distance {
+            Some(f) => Some(focus_distance(&format!("{path}.focus_distance"), f)?),
+            None => before.and_then(|b| b.focus_distance),
+        };
+        out.push(Key {
+            time,
+            pose,
+            ease,
+            aperture,
+            focus_distance,
+        });
     }
     Ok(out)
 }
@@ -290,7 +309,7 @@ fn ease(path: &str, i: usize, count: usize, value: Option<&str>) -> Check<Ease> 
     )
 }
 
-fn orbit(o: &raw::Orbit, camera: Option<Pose>) -> Check<Orbit> {
+fn orbit(o: &raw::Orbit, camera: Option<Key>) -> Check<Orbit> {
     let p = "timeline.orbit";
     let center = vector(&format!("{p}.center"), o.center)?;
     Ok(Orbit {
@@ -306,12 +325,14 @@ fn orbit(o: &raw::Orbit, camera: Option<Pose>) -> Check<Orbit> {
         },
         up: match o.up {
             Some(v) => super::direction(&format!("{p}.up"), v)?,
-            None => camera.map_or(DVec3::Y, |c| c.up),
+            None => camera.map_or(DVec3::Y, |c| c.pose.up),
         },
         fov: match o.fov {
             Some(f) => fov(&format!("{p}.fov"), f)?,
-            None => camera.map_or(90.0, |c| c.fov),
+            None => camera.map_or(90.0, |c| c.pose.fov),
         },
+        aperture: camera.map_or(0.0, |c| c.aperture),
+        focus_distance: camera.and_then(|c| c.focus_distance),
     })
 }
 
@@ -327,36 +348,50 @@ fn check_keys(t: &Timeline) -> Check<()> {
 }
 
 /// Interpolation can pass where no key is (a look-at flipping through up, a fov overshooting),
-/// so every frame's camera is built once here rather than failing mid-render.
-fn check_every_frame(t: &Timeline) -> Check<()> {
+/// so every frame's camera is built once here rather than failing mid-render; with a shutter,
+/// also the cameras at which it opens and closes (the instants between are built when the
+/// frame renders, which fails that frame with the same message should one be impossible).
+fn check_every_frame(t: &Timeline, shutter: Option<Shutter>) -> Check<()> {
     // Beyond this many frames the check would dominate loading; paths are smooth, so a dense
     // sample (every frame up to the limit, then evenly spaced) still finds any bad stretch.
     const FULL_CHECK: u64 = 1_000_000;
     let step = t.frame_count.div_ceil(FULL_CHECK).max(1);
     let mut previous_right: Option<DVec3> = None;
     for n in (t.first_frame()..=t.last_frame()).step_by(step as usize) {
-        let pose = t.pose_of(n);
-        // A view that swings through or close by `up` between two frames flips the picture
-        // over even though no sampled frame is degenerate: the right vector whips round.
-        let camera = Camera::new(&pose).and_then(|c| match previous_right {
-            Some(r) if r.dot(c.right) < libm::cos(MAX_ROLL_PER_FRAME_DEGREES.to_radians()) => {
-                Err(Degenerate::Flip)
+        let frame_time = t.time_of(n);
+        let times = match shutter {
+            Some(s) => vec![
+                s.instant(t.fps, frame_time, 0),
+                frame_time,
+                s.instant(t.fps, frame_time, INSTANTS - 1),
+            ],
+            None => vec![frame_time],
+        };
+        for time in times {
+            let pose = t.camera_at(time);
+            // A view that swings through or close by `up` between two frames flips the picture
+            // over even though no sampled frame is degenerate: the right vector whips round.
+            let camera = Camera::new(&pose).and_then(|c| match previous_right {
+                Some(r) if r.dot(c.right) < libm::cos(MAX_ROLL_PER_FRAME_DEGREES.to_radians()) => {
+                    Err(Degenerate::Flip)
+                }
+                _ => Ok(c),
+            });
+            match camera {
+                Ok(c) => previous_right = Some(c.right),
+                Err(e) => return frame_problem(t, n, time, &pose, e),
             }
-            _ => Ok(c),
-        });
-        match camera {
-            Ok(c) => previous_right = Some(c.right),
-            Err(e) => return frame_problem(t, n, &pose, e),
         }
     }
     Ok(())
 }
 
-fn frame_problem(t: &Timeline, n: u64, pose: &Pose, e: Degenerate) -> Check<()> {
+/// The message for frame `n`, whose camera at `time` (its own time, or one while the shutter
+/// is open) cannot be built.
+fn frame_problem(t: &Timeline, n: u64, time: f64, pose: &Pose, e: Degenerate) -> Check<()> {
     let (path, between) = match &t.path {
         TimelinePath::Orbit(_) => ("timeline.orbit".to_string(), String::new()),
         TimelinePath::Keys(keyed) => {
-            let time = t.time_of(n);
             let k = keyed
                 .passes
                 .partition_point(|&p| p <= time)
@@ -368,11 +403,20 @@ fn frame_problem(t: &Timeline, n: u64, pose: &Pose, e: Degenerate) -> Check<()> 
             )
         }
     };
+    let frame_time = t.time_of(n);
+    let when = if time == frame_time {
+        format!("t = {} s", num(time))
+    } else {
+        format!(
+            "t = {} s, shutter open at t = {} s",
+            num(frame_time),
+            num(time)
+        )
+    };
     invalid(
         path,
         format!(
-            "frame {n} (t = {} s){between}: {e} (position {}, look_at {}, up {}, fov {})",
-            num(t.time_of(n)),
+            "frame {n} ({when}){between}: {e} (position {}, look_at {}, up {}, fov {})",
             super::num3(pose.position),
             super::num3(pose.look_at),
             super::num3(pose.up),

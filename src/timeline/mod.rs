@@ -10,19 +10,21 @@
 //!   keyframes:
 //!     - { time: 0.0, position: [0, 0.3, 1.5], look_at: [0, 0, -0.5] }
 //!     - { time: 2.0, position: [1.5, 0.5, -0.5], fov: 70, ease: stop }
+//!     - { time: 3.0, aperture: 0.05, focus_distance: 2.5 }   # focus pulled from the key before
 //!   # or, instead of keyframes:
 //!   orbit: { center: [0, 0, -1], radius: 1.6, height: 0.35, start_angle: 0, turns: 1, duration: 6 }
 //! ```
-//! Position, look-at, up and fov are separate tracks; each key holds all four (absent values
-//! carry over from the previous key). Every track has a shape through its key values (`shape`)
-//! and a timing along it (`timing`), so its speed is continuous through the keys. A key's
-//! `ease: stop` halts every track there.
+//! Position, look-at, up, fov, aperture and focus distance are separate tracks; each key holds
+//! them all (absent values carry over from the previous key). Without any focus distance the
+//! focus follows look_at: it is |look_at − position| at every t. Every track has a shape
+//! through its key values (`shape`) and a timing along it (`timing`), so its speed is
+//! continuous through the keys. A key's `ease: stop` halts every track there.
 
 mod shape;
 mod timing;
 mod track;
 
-use crate::camera::Pose;
+use crate::camera::{Lens, Pose};
 use glam::DVec3;
 use track::{Timing, Track};
 
@@ -55,6 +57,10 @@ pub struct Key {
     pub time: f64,
     pub pose: Pose,
     pub ease: Ease,
+    /// Lens diameter in scene units (0: a pinhole).
+    pub aperture: f64,
+    /// The distance in focus; None: the distance to look_at.
+    pub focus_distance: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,6 +75,9 @@ pub struct Orbit {
     pub look_at: DVec3,
     pub up: DVec3,
     pub fov: f64,
+    pub aperture: f64,
+    /// None: the distance to look_at.
+    pub focus_distance: Option<f64>,
 }
 
 /// A keyframed move with its tracks built once, so `camera_at` only evaluates.
@@ -82,6 +91,9 @@ pub struct Keyed {
     pub passes: Vec<f64>,
     /// Position, look_at, up, fov (as x).
     tracks: [Track; 4],
+    /// Aperture, and the focus distance when some key gives one (as x).
+    aperture: Track,
+    focus: Option<Track>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -149,19 +161,35 @@ impl Keyed {
         let track = |values: Vec<DVec3>, curved: bool| {
             Track::new(passes.clone(), values, &stops, curved, timing)
         };
+        // A number's path is the number line: always straight.
+        let number = |get: &dyn Fn(&Key) -> f64| {
+            track(
+                keys.iter().map(|k| DVec3::new(get(k), 0.0, 0.0)).collect(),
+                false,
+            )
+        };
         let tracks = [
             position,
             track(values(|p| p.look_at), curved),
             track(values(|p| p.up), curved),
-            // A number's path is the number line: always straight.
-            track(values(|p| DVec3::new(p.fov, 0.0, 0.0)), false),
+            number(&|k| k.pose.fov),
         ];
+        let aperture = number(&|k| k.aperture);
+        // Keys before the first focus distance focus on their look_at.
+        let focus = keys.iter().any(|k| k.focus_distance.is_some()).then(|| {
+            number(&|k| {
+                k.focus_distance
+                    .unwrap_or_else(|| k.pose.position.distance(k.pose.look_at))
+            })
+        });
         Keyed {
             keys,
             interpolation,
             speed,
             passes,
             tracks,
+            aperture,
+            focus,
         }
     }
 
@@ -172,6 +200,16 @@ impl Keyed {
             look_at: look_at.at(t).0,
             up: up.at(t).0,
             fov: fov.at(t).0.x,
+        }
+    }
+
+    fn lens_at(&self, t: f64, pose: &Pose) -> Lens {
+        Lens {
+            aperture: self.aperture.at(t).0.x,
+            focus_distance: match &self.focus {
+                Some(focus) => focus.at(t).0.x,
+                None => pose.position.distance(pose.look_at),
+            },
         }
     }
 }
@@ -187,13 +225,9 @@ fn constant_passes(times: &[f64], reach: &[f64]) -> Vec<f64> {
 }
 
 impl Timeline {
-    /// A single frame of a still camera.
-    pub fn still(pose: Pose) -> Timeline {
-        let key = Key {
-            time: 0.0,
-            pose,
-            ease: Ease::Pass,
-        };
+    /// A single frame of a still camera (its key's time is ignored).
+    pub fn still(key: Key) -> Timeline {
+        let key = Key { time: 0.0, ..key };
         Timeline {
             fps: 24.0,
             frame_count: 1,
@@ -242,6 +276,21 @@ impl Timeline {
             Path::Orbit(o) => orbit_at(o, t),
             Path::Keys(k) => k.at(t),
         }
+    }
+
+    /// The camera and its lens at time t.
+    pub fn view_at(&self, t: f64) -> (Pose, Lens) {
+        let pose = self.camera_at(t);
+        let lens = match &self.path {
+            Path::Orbit(o) => Lens {
+                aperture: o.aperture,
+                focus_distance: o
+                    .focus_distance
+                    .unwrap_or_else(|| pose.position.distance(pose.look_at)),
+            },
+            Path::Keys(k) => k.lens_at(t, &pose),
+        };
+        (pose, lens)
     }
 
     /// The camera's speed along its path at time t, in scene units per second: at a key time

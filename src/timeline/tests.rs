@@ -14,6 +14,8 @@ fn key(time: f64, x: f64, fov: f64) -> Key {
         time,
         pose: pose(DVec3::new(x, x * x, 0.0), fov),
         ease: Ease::Pass,
+        aperture: 0.0,
+        focus_distance: None,
     }
 }
 
@@ -199,6 +201,8 @@ fn orbit_has_constant_radius_and_speed_and_loops() {
         look_at: DVec3::ZERO,
         up: DVec3::Y,
         fov: 90.0,
+        aperture: 0.0,
+        focus_distance: None,
     };
     let tl = Timeline {
         fps: 24.0,
@@ -223,7 +227,7 @@ fn orbit_has_constant_radius_and_speed_and_loops() {
 fn frame_time_is_exact_far_out() {
     let tl = Timeline {
         fps: 60.0,
-        ..Timeline::still(key(0.0, 0.0, 90.0).pose)
+        ..Timeline::still(key(0.0, 0.0, 90.0))
     };
     assert_eq!(tl.time_of(10_000_000), 10_000_000.0 / 60.0);
     assert_eq!(tl.time_of(600), 10.0);
@@ -233,7 +237,7 @@ fn frame_time_is_exact_far_out() {
 fn first_frame_and_fractional_fps() {
     let mut tl = Timeline {
         fps: 24000.0 / 1001.0,
-        ..Timeline::still(key(0.0, 0.0, 90.0).pose)
+        ..Timeline::still(key(0.0, 0.0, 90.0))
     };
     tl.clock.first_frame = 1001;
     tl.clock.fraction = Some((24000, 1001));

@@ -4,7 +4,7 @@
 //! (sequences/bench/talk_orbit.yaml, also timed against POV-Ray when `povray` is installed),
 //! and fields of 4 to 100 000 spheres for the acceleration structure.
 
-use crate::camera::Camera;
+use crate::exposure::Exposure;
 use crate::frame::Frame;
 use crate::output::{FileFormat, pattern::Pattern, png::Compression, stream::StreamFormat};
 use crate::progress::Progress;
@@ -72,6 +72,11 @@ fn pool(threads: usize) -> Result<rayon::ThreadPool, String> {
         .map_err(|e| e.to_string())
 }
 
+/// The cameras of frame 0.
+fn first_exposure(seq: &Sequence) -> Result<Exposure, String> {
+    Exposure::of_frame(&seq.timeline, seq.settings.shutter, 0).map_err(|e| e.to_string())
+}
+
 /// Renders frame 0 `runs` times on `threads` threads; returns the timing and one frame.
 fn render_only(
     world: &World,
@@ -79,12 +84,12 @@ fn render_only(
     threads: usize,
     runs: usize,
 ) -> Result<(Timing, Frame), String> {
-    let camera = Camera::new(&seq.timeline.pose_of(0)).map_err(|e| e.to_string())?;
+    let exposure = first_exposure(seq)?;
     let pool = pool(threads)?;
     let mut frame = None;
     let t = pool.install(|| {
         repeat(runs, || {
-            frame = Some(tracer::render(world, &camera, &seq.settings, 0));
+            frame = Some(tracer::render(world, &exposure, &seq.settings, 0));
             Ok(())
         })
     })?;
@@ -353,14 +358,14 @@ fn kernels(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), Stri
         let text = TALK.replace("render:\n", &format!("render:\n  {setting}\n"));
         let seq = load(&text, size)?;
         let world = World::new(seq.scene.clone());
-        let camera = Camera::new(&seq.timeline.pose_of(0)).map_err(|e| e.to_string())?;
+        let exposure = first_exposure(&seq)?;
         let mut seconds = vec![Vec::new(); kernels.len()];
         let mut frames = vec![None; kernels.len()];
         for _ in 0..o.runs {
             for (i, &k) in kernels.iter().enumerate() {
                 let start = Instant::now();
                 let frame =
-                    pool.install(|| tracer::render_with(k, &world, &camera, &seq.settings, 0));
+                    pool.install(|| tracer::render_with(k, &world, &exposure, &seq.settings, 0));
                 seconds[i].push(start.elapsed().as_secs_f64());
                 frames[i] = Some(frame.rgb.clone());
                 frame.recycle();

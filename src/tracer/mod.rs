@@ -14,7 +14,7 @@ pub mod sample;
 pub mod shade;
 pub mod vec3;
 
-use crate::camera::Camera;
+use crate::exposure::{Exposure, Shutter};
 use crate::frame::Frame;
 use crate::scene::Scene;
 pub use kernel::Kernel;
@@ -23,7 +23,7 @@ use rows::{Pass, RowOut, RowStats};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What decides a frame besides the scene and the camera.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Clone, Copy, PartialEq)]
 pub struct Settings {
     pub width: u32,
     pub height: u32,
@@ -35,6 +35,24 @@ pub struct Settings {
     pub samples: u32,
     pub adaptive: Option<Adaptive>,
     pub sampler: Sampler,
+    /// Motion blur: None when `render.shutter` is 0.
+    pub shutter: Option<Shutter>,
+}
+
+/// The derived form without `shutter`, whose effect shows in each frame's cameras (see
+/// `exposure`); the fingerprint does not use this text (see `output::fingerprint::Canon`).
+impl std::fmt::Debug for Settings {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.debug_struct("Settings")
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .field("max_depth", &self.max_depth)
+            .field("depth", &self.depth)
+            .field("samples", &self.samples)
+            .field("adaptive", &self.adaptive)
+            .field("sampler", &self.sampler)
+            .finish()
+    }
 }
 
 /// Adaptive sampling: every pixel gets `samples`; pixels whose samples disagree, or whose
@@ -98,38 +116,39 @@ impl World {
     }
 }
 
-pub fn render(world: &World, camera: &Camera, settings: &Settings, frame: u64) -> Frame {
-    render_with(Kernel::chosen(), world, camera, settings, frame)
+/// Frame number `frame` of `world` seen with `exposure`'s cameras.
+pub fn render(world: &World, exposure: &Exposure, settings: &Settings, frame: u64) -> Frame {
+    render_with(Kernel::chosen(), world, exposure, settings, frame)
 }
 
 /// `render`, given up (`None`) as soon as `stop` is set: it is checked before each band of
 /// rows, each packet and each sample, so even a frame of hours stops within milliseconds.
 pub fn render_or_stop(
     world: &World,
-    camera: &Camera,
+    exposure: &Exposure,
     settings: &Settings,
     frame: u64,
     stop: &AtomicBool,
 ) -> Option<Frame> {
-    render_frame(Kernel::chosen(), world, camera, settings, frame, stop)
+    render_frame(Kernel::chosen(), world, exposure, settings, frame, stop)
 }
 
 /// `render` with a given kernel (they all give the same frame; benchmarks compare them).
 pub fn render_with(
     kernel: Kernel,
     world: &World,
-    camera: &Camera,
+    exposure: &Exposure,
     settings: &Settings,
     frame: u64,
 ) -> Frame {
     let never = AtomicBool::new(false);
-    render_frame(kernel, world, camera, settings, frame, &never).expect("never stopped")
+    render_frame(kernel, world, exposure, settings, frame, &never).expect("never stopped")
 }
 
 fn render_frame(
     kernel: Kernel,
     world: &World,
-    camera: &Camera,
+    exposure: &Exposure,
     settings: &Settings,
     frame: u64,
     stop: &AtomicBool,
@@ -144,10 +163,12 @@ fn render_frame(
             0
         }
     ];
+    let camera = &exposure.camera;
     let from_origin = world.geometry.from_origin(camera.origin);
     let first = Pass {
         world,
         camera,
+        exposure: exposure.sampled().then_some(exposure),
         settings,
         frame,
         samples: Samples::All(settings.samples),

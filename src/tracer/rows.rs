@@ -7,18 +7,23 @@
 use super::accel::{FromOrigin, Rays};
 use super::intersect::Ray;
 use super::lanes::{Lanes, Mask};
-use super::sample::{Pattern, Seed};
+use super::sample::{Dims, Pattern, Seed};
 use super::shade::{self, Eye};
 use super::vec3::V3;
 use super::{Sampler, Samples, Settings, World, finite};
 use crate::camera::{Camera, screen_points};
+use crate::exposure::{Exposure, INSTANTS};
 use glam::DVec3;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Everything one pass over a frame needs, shared by its packets.
 pub(super) struct Pass<'a> {
     pub world: &'a World,
+    /// The camera at the frame's time: every eye ray's, unless `exposure` is set.
     pub camera: &'a Camera,
+    /// Set when eye rays leave from more than one point (a lens, or a camera moving while
+    /// the shutter is open): each sample then takes its own instant and lens point.
+    pub exposure: Option<&'a Exposure>,
     pub settings: &'a Settings,
     pub frame: u64,
     pub samples: Samples,
@@ -198,16 +203,29 @@ fn packet<V: Lanes>(
         V3::<V>::splat(DVec3::INFINITY),
         V3::<V>::splat(DVec3::NEG_INFINITY),
     );
+    let dims: Option<[Dims; 16]> = pass.exposure.map(|_| {
+        std::array::from_fn(|k| {
+            let pixel = u64::from(px.rows[k]) * u64::from(s.width) + u64::from(px.cols[k]);
+            Dims::new(pattern, pass.frame, pixel)
+        })
+    });
     for k in (first..end).take_while(|_| !pass.stopped()) {
         let (u, v) = offsets::<V>(pattern, &seeds, k);
-        let eye = Eye {
-            rays: Rays {
-                origin: V3::splat(pass.camera.origin),
-                dir: eye_directions(pass, row, col, u, v),
-                leaving: V::splat(-1.0),
+        let eye = match (pass.exposure, &dims) {
+            (Some(exposure), Some(dims)) => Eye {
+                rays: sampled_rays(pass, exposure, row, col, u, v, (pattern, dims, k)),
+                active: V::M::from_bits(px.valid),
+                from_origin: None,
             },
-            active: V::M::from_bits(px.valid),
-            from_origin: Some(pass.from_origin),
+            _ => Eye {
+                rays: Rays {
+                    origin: V3::splat(pass.camera.origin),
+                    dir: eye_directions(pass, row, col, u, v),
+                    leaving: V::splat(-1.0),
+                },
+                active: V::M::from_bits(px.valid),
+                from_origin: Some(pass.from_origin),
+            },
         };
         let c = shade::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays);
         sum = sum + c;
@@ -292,6 +310,81 @@ fn eye_directions<V: Lanes>(pass: &Pass, row: V, col: V, u: V, v: V) -> V3<V> {
     let s = pass.settings;
     let (x, y) = screen_points(row, col, u, v, s.width, s.height);
     pass.camera.directions(x, y)
+}
+
+/// Eye rays of sample `k` (of `pattern`, for pixels with `dims`) from each lane's own camera:
+/// the one at its sample's instant while the shutter is open, else the frame's; through a
+/// point of its lens when the aperture is open there. A lane whose camera is a pinhole gets
+/// exactly the ray `eye_directions` gives.
+#[inline(always)]
+fn sampled_rays<V: Lanes>(
+    pass: &Pass,
+    exposure: &Exposure,
+    row: V,
+    col: V,
+    u: V,
+    v: V,
+    (pattern, dims, k): (Pattern, &[Dims; 16], u32),
+) -> Rays<V> {
+    let mut cameras = [&exposure.camera; 16];
+    let mut disc = [(0.0, 0.0); 16];
+    for lane in 0..V::N {
+        let [t, a, b] = dims[lane].at(pattern, k);
+        if !exposure.instants.is_empty() {
+            let j = ((t * INSTANTS as f64) as usize).min(INSTANTS - 1);
+            cameras[lane] = &exposure.instants[j];
+        }
+        // sin and cos cost more than the rest of the ray: only for a lens that is open.
+        if cameras[lane].lens_radius > 0.0 {
+            disc[lane] = concentric(a, b);
+        }
+    }
+    let s = pass.settings;
+    let (x, y) = screen_points(row, col, u, v, s.width, s.height);
+    let tan = V::from_fn(|i| cameras[i].tan_half_fov);
+    let (x, y) = (x * tan, y * tan);
+    let origin = V3::from_fn(|i| cameras[i].origin);
+    let right = V3::from_fn(|i| cameras[i].right);
+    let up = V3::from_fn(|i| cameras[i].up);
+    // The direction through the screen point, before it is normalised: its component along
+    // the view axis is 1, so origin + focus·w lies on the plane in focus.
+    let w = V3::from_fn(|i| cameras[i].forward) + right * x + up * y;
+    let pinhole = w.normalize();
+    let radius = V::from_fn(|i| cameras[i].lens_radius);
+    let open = V::splat(0.0).lt(radius);
+    if !open.any() {
+        return Rays {
+            origin,
+            dir: pinhole,
+            leaving: V::splat(-1.0),
+        };
+    }
+    let focus = V::from_fn(|i| cameras[i].focus_distance);
+    let (dx, dy) = (V::from_fn(|i| disc[i].0), V::from_fn(|i| disc[i].1));
+    let lens = origin + right * (radius * dx) + up * (radius * dy);
+    let target = origin + w * focus;
+    Rays {
+        origin: V3::select(open, lens, origin),
+        dir: V3::select(open, (target - lens).normalize(), pinhole),
+        leaving: V::splat(-1.0),
+    }
+}
+
+/// Shirley and Chiu's concentric map of [0, 1)² onto the unit disc: squares around the centre
+/// become rings, so stratified points stay stratified and evenly spread.
+#[inline]
+pub fn concentric(a: f64, b: f64) -> (f64, f64) {
+    let (a, b) = (2.0 * a - 1.0, 2.0 * b - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return (0.0, 0.0);
+    }
+    let quarter = std::f64::consts::FRAC_PI_4;
+    let (r, phi) = if a.abs() > b.abs() {
+        (a, quarter * (b / a))
+    } else {
+        (b, 2.0 * quarter - quarter * (a / b))
+    };
+    (r * libm::cos(phi), r * libm::sin(phi))
 }
 
 /// Distance along each pixel centre's eye ray to the first hit (+inf for background).

@@ -2,6 +2,12 @@
 //! N = n² samples are jittered on an n×n grid; other counts follow the R2 low-discrepancy
 //! sequence with a per-pixel random shift. Every random number is a hash of (frame, pixel,
 //! sample), so any pixel of any frame is reproducible alone, on any thread or machine.
+//!
+//! With motion blur or depth of field each sample also has a time and a point on the lens
+//! (`Dims`), drawn beside its position in the pixel, which stays exactly what it is without
+//! them. On a grid the N time strata and the n×n lens cells are each used once and paired
+//! with the pixel cells through per-pixel pseudo-random permutations (a Latin hypercube over
+//! the three); R2 samples continue with the R3 sequence in time and on the lens.
 
 /// How a pass places a pixel's samples.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -99,11 +105,110 @@ pub fn independent(frame: u64, pixel: u64, k: u32) -> (f64, f64) {
     Seed::new(Pattern::Independent, frame, pixel).offset(Pattern::Independent, k)
 }
 
+/// Time and lens coordinates of a pixel's samples: what depends only on (frame, pixel).
+#[derive(Debug, Clone, Copy)]
+pub struct Dims {
+    /// The hash state of this pixel's extra dimensions.
+    state: u64,
+    /// R3's shift for this pixel.
+    shift: [f64; 3],
+}
+
+/// Separates the hashes of the extra dimensions from those of the pixel position.
+const DIMS: u64 = 0x6a09_e667_f3bc_c909;
+
+impl Dims {
+    pub fn new(pattern: Pattern, frame: u64, pixel: u64) -> Dims {
+        let state = mix(mix(mix(0x9e37_79b9_7f4a_7c15 ^ frame) ^ pixel) ^ DIMS);
+        let shift = match pattern {
+            Pattern::R2 => random3(mix(state ^ u64::from(u32::MAX))),
+            _ => [0.0; 3],
+        };
+        Dims { state, shift }
+    }
+
+    /// Sample `k`'s time and lens coordinates, [t, a, b] ∈ [0, 1)³ (a grid's may round up to 1).
+    #[inline]
+    pub fn at(&self, pattern: Pattern, k: u32) -> [f64; 3] {
+        match pattern {
+            Pattern::Grid(n) => {
+                let count = n * n;
+                let [jt, ja, jb] = random3(mix(self.state ^ u64::from(k)));
+                let stratum = permute(k, count, (self.state >> 32) as u32);
+                let cell = permute(k, count, self.state as u32);
+                [
+                    (f64::from(stratum) + jt) / f64::from(count),
+                    (f64::from(cell % n) + ja) / f64::from(n),
+                    (f64::from(cell / n) + jb) / f64::from(n),
+                ]
+            }
+            Pattern::R2 => {
+                // The R3 sequence (Roberts 2018): 1/φ₃^d, φ₃ the real root of x⁴ = x + 1.
+                const B: [f64; 3] = [
+                    0.819_172_513_396_164_5,
+                    0.671_043_606_703_789_3,
+                    0.549_700_477_901_970_3,
+                ];
+                let i = f64::from(k) + 1.0;
+                [0, 1, 2].map(|d| (self.shift[d] + i * B[d]).fract())
+            }
+            Pattern::Centre | Pattern::Independent => random3(mix(self.state ^ u64::from(k))),
+        }
+    }
+}
+
+/// Element `i` of a pseudo-random permutation of 0..l chosen by `p`: Kensler's hash
+/// ("Correlated Multi-Jittered Sampling", Pixar 2013, as pbrt-v4's `PermutationElement`), a
+/// bijection on the smallest power of two ≥ l walked until it lands below l; the final
+/// (i + p) mod l is taken without the 32-bit wrap-around, which would break the bijection.
+fn permute(mut i: u32, l: u32, p: u32) -> u32 {
+    let mut w = l - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | p >> 27);
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < l {
+            return (i + p % l) % l;
+        }
+    }
+}
+
+/// Three uniform numbers in [0, 1) from one hash.
+#[inline]
+fn random3(h: u64) -> [f64; 3] {
+    [unit(h), unit(mix(h)), unit(mix(mix(h)))]
+}
+
+/// The top 53 bits of a hash as a number in [0, 1).
+#[inline]
+fn unit(bits: u64) -> f64 {
+    (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
 /// Two uniform numbers in [0, 1) from a hash of the pixel's state and the sample index.
 #[inline]
 fn random2(state: u64, k: u32) -> (f64, f64) {
     let h = mix(state ^ u64::from(k));
-    let unit = |bits: u64| (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
     (unit(h), unit(mix(h)))
 }
 
@@ -135,6 +240,101 @@ mod tests {
             assert!(!cells[cell], "two samples in cell {cell}");
             cells[cell] = true;
         }
+    }
+
+    #[test]
+    fn permutations_are_permutations() {
+        for l in [1, 2, 3, 4, 9, 16, 25, 64, 100, 256, 4096] {
+            for p in [0, 1, 0xdead_beef, u32::MAX, 0x8000_0001] {
+                let mut seen = vec![false; l as usize];
+                for i in 0..l {
+                    let j = permute(i, l, p) as usize;
+                    assert!(!seen[j], "l {l} p {p}: {j} twice");
+                    seen[j] = true;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn time_and_lens_coordinates_are_the_readmes() {
+        // Bits from tests/reference/sample_dims_reference.py, written from the README alone.
+        let cases = [
+            (
+                Pattern::Grid(2),
+                7,
+                12345,
+                0,
+                [0x3fdca9cd3ee71220, 0x3fd99d1b48f03702, 0x3fde0671cead9d54],
+            ),
+            (
+                Pattern::Grid(2),
+                7,
+                12345,
+                3,
+                [0x3fe357f332df7f36, 0x3fe4b7e2309593c4, 0x3fe08da2f6e27eb8],
+            ),
+            (
+                Pattern::Grid(3),
+                3,
+                999,
+                8,
+                [0x3fca06f014089647, 0x3fec18d0f1f72689, 0x3fd22f4e344f666a],
+            ),
+            (
+                Pattern::R2,
+                7,
+                12345,
+                0,
+                [0x3fd4bfaf88c29604, 0x3feac619c943e4eb, 0x3fda58d6708254b0],
+            ),
+            (
+                Pattern::R2,
+                7,
+                12345,
+                31,
+                [0x3fe6fe57494d6460, 0x3fe472f77c12b1c0, 0x3fdcf3e8c03071c0],
+            ),
+            (
+                Pattern::Centre,
+                7,
+                12345,
+                0,
+                [0x3fe9539a7dce2440, 0x3fe99d1b48f03702, 0x3fee0671cead9d54],
+            ),
+        ];
+        for (pattern, frame, pixel, k, want) in cases {
+            let got = Dims::new(pattern, frame, pixel)
+                .at(pattern, k)
+                .map(f64::to_bits);
+            assert_eq!(
+                got, want,
+                "{pattern:?} frame {frame} pixel {pixel} sample {k}"
+            );
+        }
+    }
+
+    #[test]
+    fn grid_samples_use_each_time_stratum_and_lens_cell_once() {
+        let pattern = Pattern::Grid(4);
+        let d = Dims::new(pattern, 7, 12345);
+        let (mut strata, mut cells) = ([false; 16], [false; 16]);
+        for k in 0..16 {
+            let [t, a, b] = d.at(pattern, k);
+            let s = (t * 16.0) as usize;
+            let c = (b * 4.0) as usize * 4 + (a * 4.0) as usize;
+            assert!(
+                !strata[s] && !cells[c],
+                "sample {k}: stratum {s}, cell {c} again"
+            );
+            (strata[s], cells[c]) = (true, true);
+        }
+        // Paired differently in another pixel.
+        let other = Dims::new(pattern, 7, 12346);
+        assert!(
+            (0..16).any(|k| (d.at(pattern, k)[0] * 16.0) as usize
+                != (other.at(pattern, k)[0] * 16.0) as usize)
+        );
     }
 
     #[test]

@@ -122,6 +122,16 @@ lights:
 ";
 
 /// A sequence file of the test scene at `width`×`height` with `timeline` (a YAML block).
+/// A linear timeline of three keys at 12 fps (49 frames) moving past the test scene.
+pub const THREE_KEYS: &str = "timeline:
+  fps: 12
+  interpolation: linear
+  keyframes:
+    - { time: 0, position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }
+    - { time: 2, position: [1.5, 0.4, 0.5] }
+    - { time: 4, position: [0, 0.5, -2.5] }
+";
+
 pub fn sequence(width: u32, height: u32, timeline: &str) -> String {
     format!("render: {{ width: {width}, height: {height} }}\n{SCENE}{timeline}")
 }

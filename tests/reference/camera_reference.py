@@ -141,11 +141,15 @@ def main(path):
     fps = float(tl.get('fps', 24)); smooth = tl.get('interpolation', 'smooth') == 'smooth'
     prev = {'position': cam.get('position'), 'look_at': cam.get('look_at'),
             'up': cam.get('up', [0, 1, 0]), 'fov': cam.get('fov', 90)}
+    if 'focus_distance' in cam: prev['focus_distance'] = cam['focus_distance']
     keys = []
     for k in tl['keyframes']:
         pose = {f: [float(x) for x in k.get(f, prev[f])] if f != 'fov' else float(k.get(f, prev[f]))
-                for f in prev}
+                for f in ('position', 'look_at', 'up', 'fov')}
         pose['up'] = unit(pose['up'])
+        # A key without focus_distance keeps the previous key's; before any, its look_at's.
+        focus = k.get('focus_distance', prev.get('focus_distance'))
+        if focus is not None: pose['focus_distance'] = float(focus)
         keys.append((float(k['time']), pose, k.get('ease', 'pass') == 'stop')); prev = pose
     times = [k[0] for k in keys]; stops = [k[2] for k in keys]
     values = lambda f: [k[1][f] if f != 'fov' else [k[1][f], 0.0, 0.0] for k in keys]
@@ -157,6 +161,10 @@ def main(path):
         S = position.S
         passes = [times[0] + (times[-1] - times[0]) * (s / S[-1]) for s in S]; passes[-1] = times[-1]
     others = [Track(passes, values(f), stops, smooth and f != 'fov', timing) for f in ('look_at', 'up', 'fov')]
+    focus = None
+    if any('focus_distance' in k[1] for k in keys):
+        at_key = [[k[1].get('focus_distance', length(sub(k[1]['look_at'], k[1]['position']))), 0.0, 0.0] for k in keys]
+        focus = Track(passes, at_key, stops, False, timing)
     if 'duration' in tl: frames = round(float(tl['duration']) * fps)
     else: frames = max(0, math.ceil(times[-1] * fps - 1e-6)) + 1
     print("frame,time,position_x,position_y,position_z,look_at_x,look_at_y,look_at_z,up_x,up_y,up_z,fov,speed,focus_distance")
@@ -164,7 +172,8 @@ def main(path):
         t = n / fps
         p, speed = position.at(t)
         l, u, f = (tr.at(t)[0] for tr in others)
-        cells = [n, t, *p, *l, *u, f[0], speed, length(sub(l, p))]
+        d = focus.at(t)[0][0] if focus else length(sub(l, p))
+        cells = [n, t, *p, *l, *u, f[0], speed, d]
         print(",".join(repr(float(c)) if i else str(c) for i, c in enumerate(cells)))
 
 main(sys.argv[1])
