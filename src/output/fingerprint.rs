@@ -165,26 +165,32 @@ impl<T: Canon> Canon for Option<T> {
     }
 }
 
+/// `canon_struct!(Type { a, b })`: encodes a `Type` field by field, in the order given (the
+/// declaration order). The value is destructured whole, so a field added to `Type` and not
+/// listed here does not compile.
+macro_rules! canon_struct {
+    ($ty:ident { $($field:ident),* $(,)? }) => {
+        impl Canon for $ty {
+            fn canon(&self, h: &mut Hasher) {
+                let $ty { $($field),* } = self;
+                $($field.canon(h);)*
+            }
+        }
+    };
+}
+
 /// A tag byte, then the fields.
 fn tagged(h: &mut Hasher, tag: u8, fields: &[&dyn Canon]) {
     h.write(&[tag]);
     fields.iter().for_each(|f| f.canon(h));
 }
 
-impl Canon for Scene {
-    fn canon(&self, h: &mut Hasher) {
-        let Scene {
-            objects,
-            materials,
-            lights,
-            background,
-        } = self;
-        objects.canon(h);
-        materials.canon(h);
-        lights.canon(h);
-        background.canon(h);
-    }
-}
+canon_struct!(Scene {
+    objects,
+    materials,
+    lights,
+    background,
+});
 
 impl Canon for Object {
     fn canon(&self, h: &mut Hasher) {
@@ -197,44 +203,23 @@ impl Canon for Object {
     }
 }
 
-impl Canon for Material {
-    fn canon(&self, h: &mut Hasher) {
-        let Material {
-            ambient,
-            diffuse,
-            specular,
-            exponent,
-            specular_floor,
-            reflection,
-            transmission,
-            ior,
-            fresnel,
-        } = self;
-        let fields: [&dyn Canon; 9] = [
-            ambient,
-            diffuse,
-            specular,
-            exponent,
-            specular_floor,
-            reflection,
-            transmission,
-            ior,
-            fresnel,
-        ];
-        fields.iter().for_each(|f| f.canon(h));
-    }
-}
+canon_struct!(Material {
+    ambient,
+    diffuse,
+    specular,
+    exponent,
+    specular_floor,
+    reflection,
+    transmission,
+    ior,
+    fresnel,
+});
 
-impl Canon for Intensity {
-    fn canon(&self, h: &mut Hasher) {
-        let Intensity {
-            ambient,
-            diffuse,
-            specular,
-        } = self;
-        [ambient, diffuse, specular].iter().for_each(|f| f.canon(h));
-    }
-}
+canon_struct!(Intensity {
+    ambient,
+    diffuse,
+    specular,
+});
 
 impl Canon for Light {
     fn canon(&self, h: &mut Hasher) {
@@ -283,16 +268,10 @@ impl Canon for Settings {
     }
 }
 
-impl Canon for Adaptive {
-    fn canon(&self, h: &mut Hasher) {
-        let Adaptive {
-            threshold,
-            max_samples,
-        } = self;
-        threshold.canon(h);
-        max_samples.canon(h);
-    }
-}
+canon_struct!(Adaptive {
+    threshold,
+    max_samples,
+});
 
 /// What decides the decoded content; PNG compression only changes how it is packed.
 impl Canon for FileFormat {
@@ -307,42 +286,22 @@ impl Canon for FileFormat {
     }
 }
 
-impl Canon for Pose {
-    fn canon(&self, h: &mut Hasher) {
-        let Pose {
-            position,
-            look_at,
-            up,
-            fov,
-        } = self;
-        let fields: [&dyn Canon; 4] = [position, look_at, up, fov];
-        fields.iter().for_each(|f| f.canon(h));
-    }
-}
+canon_struct!(Pose {
+    position,
+    look_at,
+    up,
+    fov,
+});
 
-impl Canon for Camera {
-    fn canon(&self, h: &mut Hasher) {
-        let Camera {
-            origin,
-            forward,
-            right,
-            up,
-            tan_half_fov,
-            lens_radius,
-            focus_distance,
-        } = self;
-        let fields: [&dyn Canon; 7] = [
-            origin,
-            forward,
-            right,
-            up,
-            tan_half_fov,
-            lens_radius,
-            focus_distance,
-        ];
-        fields.iter().for_each(|f| f.canon(h));
-    }
-}
+canon_struct!(Camera {
+    origin,
+    forward,
+    right,
+    up,
+    tan_half_fov,
+    lens_radius,
+    focus_distance,
+});
 
 #[cfg(test)]
 mod tests {
