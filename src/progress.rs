@@ -199,9 +199,9 @@ impl Progress {
         self.done += 1;
         match &self.mode {
             Mode::Quiet => {}
+            // The frame's own number (from `first_frame`), then this run's count.
             Mode::Lines => eprintln!(
-                "frame {n}/{} written {} ({seconds:.2} s, {} of {} done)",
-                self.sequence_frames,
+                "frame {n} written {} ({seconds:.2} s, {} of {} done)",
                 printable(destination),
                 self.done,
                 self.total

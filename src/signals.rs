@@ -59,7 +59,7 @@ pub fn install_interrupt_handler() {
                     .and_then(|_| flag::register(signal, Arc::clone(seen)))
                     .and_then(|_| flag::register(signal, Arc::clone(&s.any)));
             if let Err(e) = registered {
-                eprintln!("rayreel: cannot handle signal {signal}: {e}");
+                crate::console::warning(&format!("rayreel: cannot handle signal {signal}: {e}"));
             }
         }
         s

@@ -363,3 +363,57 @@ fn preview_lands_beside_the_frames() {
         ["seq_path.png", "seq_sheet.png"]
     );
 }
+
+#[test]
+fn ctrl_c_in_json_mode_is_json_too() {
+    let tmp = scratch("fits-json-sigint");
+    small(&tmp, 2000);
+    let mut child = bin()
+        .args(["render", "seq.yaml", "--progress", "json", "--threads", "1"])
+        .current_dir(&tmp)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut lines = Vec::new();
+    // Wait for the first frame, then interrupt.
+    loop {
+        let mut line = String::new();
+        assert!(std::io::BufRead::read_line(&mut stderr, &mut line).unwrap() > 0);
+        let done = line.contains("\"event\": \"frame\"");
+        lines.push(line);
+        if done {
+            break;
+        }
+    }
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let mut rest = String::new();
+    stderr.read_to_string(&mut rest).unwrap();
+    let status = child.wait().unwrap();
+    lines.extend(rest.lines().map(String::from));
+    let events: Vec<serde_json::Value> = lines
+        .iter()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect();
+    assert_eq!(status.code(), Some(130));
+    let kinds: Vec<&str> = events
+        .iter()
+        .map(|e| e["event"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds[0], "start", "{kinds:?}");
+    let interrupt = events.iter().find(|e| e["event"] == "interrupt").unwrap();
+    assert_eq!(interrupt["signal"], "SIGINT");
+    assert!(
+        interrupt["text"]
+            .as_str()
+            .unwrap()
+            .contains("Ctrl-C again to abort")
+    );
+    let summary = events.iter().find(|e| e["event"] == "summary").unwrap();
+    assert_eq!(summary["interrupted"], true);
+    let error = events.last().unwrap();
+    assert_eq!(
+        (error["event"].as_str(), error["exit_code"].as_u64()),
+        (Some("error"), Some(130))
+    );
+}

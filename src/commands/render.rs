@@ -273,7 +273,7 @@ fn print_dry_run(
     if !piping {
         return out(&text);
     }
-    eprint!("{}", crate::console::printable_lines(&text));
+    text.lines().for_each(crate::console::note);
     Ok(())
 }
 
