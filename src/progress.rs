@@ -216,7 +216,6 @@ impl Progress {
                 if self.done == 1 {
                     bar.set_style(style(true));
                 }
-                bar.set_message(printable(destination).into_owned());
                 bar.inc(1);
             }
         }
@@ -274,12 +273,14 @@ fn bar(total: u64) -> ProgressBar {
     bar
 }
 
-/// The bar fills what the terminal's width leaves (`wide_bar`), so it never wraps; the rate
-/// and the ETA appear once a frame is done (before that they would be guesses from nothing).
+/// The bar fills what the terminal's width leaves (`wide_bar`; the text beside it takes 40
+/// columns at most, so a 60-column terminal still has a bar and no wrapped line); the rate
+/// and the ETA appear once a frame is done (before that they would be guesses from nothing),
+/// and `stopping` once a signal came.
 fn style(timed: bool) -> ProgressStyle {
     let template = match timed {
-        true => "{wide_bar:.cyan/blue} {pos}/{len} frames  {rate}  eta {eta}  {msg:.20}",
-        false => "{wide_bar:.cyan/blue} {pos}/{len} frames  {msg:.20}",
+        true => "{wide_bar:.cyan/blue} {pos}/{len} frames  {rate}  eta {eta} {msg}",
+        false => "{wide_bar:.cyan/blue} {pos}/{len} frames {msg}",
     };
     ProgressStyle::with_template(template)
         .expect("static template")
