@@ -69,21 +69,42 @@ fn print_ffmpeg_pastes_into_a_shell_for_streams_and_files() {
 fn status_takes_the_render_command_line() {
     let tmp = scratch("fits-status");
     small(&tmp, 3);
+    // The Slurm script's line, as an array task runs it and as the final check repeats it.
     let run = [
         "seq.yaml",
+        "--shard",
+        "auto",
         "--threads",
         "2",
         "--progress",
         "json",
-        "--claim",
         "-q",
     ];
     let status = [&["status"][..], &run].concat();
     let out = run_in(&tmp, &status);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
-    let out = run_in(&tmp, &[&["render"][..], &run].concat());
-    assert!(out.status.success(), "{}", stderr(&out));
-    let out = run_in(&tmp, &status);
+    for task in ["0", "1"] {
+        let out = bin()
+            .args([&["render"][..], &run].concat())
+            .current_dir(&tmp)
+            .env("SLURM_ARRAY_TASK_ID", task)
+            .env("SLURM_ARRAY_TASK_COUNT", "2")
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+        let out = run_in(&tmp, &status);
+        let complete = if task == "0" { 1 } else { 0 };
+        assert_eq!(out.status.code(), Some(complete), "{}", stderr(&out));
+    }
+    // Run-time flags are accepted and change nothing.
+    let more = [
+        "--claim",
+        "--claim-timeout",
+        "60",
+        "--force",
+        "--print-ffmpeg",
+    ];
+    let out = run_in(&tmp, &[&status[..], &more].concat());
     assert!(out.status.success(), "{}", stderr(&out));
 }
 
@@ -293,6 +314,12 @@ fn studio_frame_numbers_and_fractional_rates() {
     let tmp = scratch("fits-1001");
     let timeline = "timeline:\n  fps: 24000/1001\n  first_frame: 1001\n  keyframes:\n    - { time: 0, position: [0, 0, 3], look_at: [0, 0, 0] }\n    - { time: 1.001, position: [1, 0, 3], look_at: [0, 0, 0] }\n";
     std::fs::write(tmp.join("seq.yaml"), sequence(64, 36, timeline)).unwrap();
+    let out = run_in(&tmp, &["check", "seq.yaml"]);
+    let summary = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        summary.contains("25 at 24000/1001 fps (1.001 s, frames 1001-1025)"),
+        "{summary}"
+    );
     let out = run_in(&tmp, &["camera", "seq.yaml"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let csv = String::from_utf8(out.stdout).unwrap();

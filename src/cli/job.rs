@@ -3,7 +3,7 @@
 //! (clap has already checked each of them), the frame spec and shard become this task's
 //! frames, and the output pattern and format become the file sink.
 
-use super::{BitDepth, JobArgs, resolve_shard};
+use super::{BitDepth, JobArgs, ShardSpec, resolve_shard};
 use crate::Error;
 use crate::frameset::FrameSet;
 use crate::output::FileFormat;
@@ -23,9 +23,20 @@ pub struct Job {
 impl Job {
     /// Loads the file and applies the arguments.
     pub fn new(args: &JobArgs) -> Result<Job, Error> {
+        Job::load(args, false)
+    }
+
+    /// `new` for `status`, the final check of a whole farm job: `--shard auto` outside a job
+    /// array (no scheduler index set) means every shard, so the array script's own line can
+    /// be repeated with `status` after the array ends.
+    pub fn for_status(args: &JobArgs) -> Result<Job, Error> {
+        Job::load(args, true)
+    }
+
+    fn load(args: &JobArgs, every_shard: bool) -> Result<Job, Error> {
         let mut seq = sequence::load(&args.file)?;
         apply(&mut seq, args)?;
-        let frames = frames(&seq, args)?;
+        let frames = frames(&seq, args, every_shard)?;
         Ok(Job {
             seq,
             frames,
@@ -106,8 +117,9 @@ fn apply(seq: &mut Sequence, o: &JobArgs) -> Result<(), Error> {
     Ok(())
 }
 
-/// This task's frames: the spec's (default all), then the shard's share.
-fn frames(seq: &Sequence, args: &JobArgs) -> Result<FrameSet, Error> {
+/// This task's frames: the spec's (default all), then the shard's share (`every_shard`: all
+/// of them when `--shard auto` finds no scheduler index).
+fn frames(seq: &Sequence, args: &JobArgs, every_shard: bool) -> Result<FrameSet, Error> {
     let (first, last) = (seq.timeline.first_frame(), seq.timeline.last_frame());
     let mut frames = match &args.frames {
         Some(spec) => spec
@@ -115,8 +127,15 @@ fn frames(seq: &Sequence, args: &JobArgs) -> Result<FrameSet, Error> {
             .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
         None => FrameSet::range(first, last, 1),
     };
-    if let Some(spec) = args.shard {
-        let env = |name: &str| std::env::var(name).ok();
+    let env = |name: &str| std::env::var(name).ok();
+    let unscheduled = ["SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"]
+        .iter()
+        .all(|v| env(v).is_none());
+    let shard = match args.shard {
+        Some(ShardSpec::Auto) if every_shard && unscheduled => None,
+        other => other,
+    };
+    if let Some(spec) = shard {
         let (k, n) = resolve_shard(spec, args.shard_count, &env)
             .map_err(|e| Error::Usage(format!("--shard: {e}")))?;
         frames = frames.shard(k, n);

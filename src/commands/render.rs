@@ -430,7 +430,7 @@ pub(crate) fn plural(n: u64, noun: &str) -> String {
 /// `rayreel status`: the completeness of the output against the sequence; exit 0 only when
 /// every selected frame is up to date.
 pub fn status(args: RenderArgs) -> Result<(), Error> {
-    let spec = JobSpec::new(&args.job)?;
+    let spec = JobSpec::for_status(&args.job)?;
     let files = spec.files(&args.job)?;
     let (seq, frames) = (spec.seq, spec.frames);
     let plan = plan::plan(&seq, &frames, &files, false);
