@@ -5,7 +5,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::DVec3;
 use rayreel::scene::Shape;
-use rayreel::sequence::{self, Overrides};
+use rayreel::sequence;
 use rayreel::tracer::World;
 use rayreel::tracer::intersect::{Ray, intersect};
 use rayreel::tracer::shade::trace;
@@ -14,7 +14,7 @@ use std::path::Path;
 
 fn talk() -> World {
     let text = include_str!("../sequences/talk.yaml");
-    let seq = sequence::parse(Path::new("talk.yaml"), text, &Overrides::default()).unwrap();
+    let seq = sequence::parse(Path::new("talk.yaml"), text).unwrap();
     World::new(seq.scene)
 }
 

@@ -3,6 +3,46 @@
 
 use std::borrow::Cow;
 use std::io::{ErrorKind, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Set by `--progress json`: every line on stderr is then one JSON object.
+static JSON: AtomicBool = AtomicBool::new(false);
+
+pub fn set_json(on: bool) {
+    JSON.store(on, Ordering::Relaxed);
+}
+
+/// The line `main` prints for an error that ends the run: `rayreel: MESSAGE`, or with
+/// `--progress json` `{"event": "error", "text": "MESSAGE", "exit_code": N}`.
+pub fn error_line(message: &str, exit_code: u8) -> String {
+    match JSON.load(Ordering::Relaxed) {
+        true => format!(
+            "{{\"event\": \"error\", \"text\": {}, \"exit_code\": {exit_code}}}",
+            crate::progress::quote(message)
+        ),
+        false => format!("rayreel: {}", printable(message)),
+    }
+}
+
+/// A line on stderr that is not about one frame: as it is, or as a JSON `note` event.
+pub fn note(text: &str) {
+    line("note", text);
+}
+
+/// A warning on stderr: as it is, or as a JSON `warning` event.
+pub fn warning(text: &str) {
+    line("warning", text);
+}
+
+fn line(event: &str, text: &str) {
+    match JSON.load(Ordering::Relaxed) {
+        true => eprintln!(
+            "{{\"event\": \"{event}\", \"text\": {}}}",
+            crate::progress::quote(text)
+        ),
+        false => eprintln!("{}", printable(text)),
+    }
+}
 
 /// Writes `text` to stdout. A reader that has gone (`rayreel status FILE | head -1`) ends the
 /// output normally, as in ripgrep; any other failure is an error.
@@ -29,6 +69,12 @@ pub fn printable(s: &str) -> Cow<'_, str> {
         }
     }
     Cow::Owned(out)
+}
+
+/// `printable` line by line: the line breaks stay.
+pub fn printable_lines(s: &str) -> String {
+    let lines: Vec<Cow<str>> = s.split('\n').map(printable).collect();
+    lines.join("\n")
 }
 
 fn hostile(c: char) -> bool {

@@ -11,9 +11,8 @@
 //! the camera there. The cameras are exact `camera_at` evaluations, built once a frame: a smooth
 //! keyframed camera costs about 2 µs to evaluate, far too much for every sample.
 
-use crate::camera::{Camera, Degenerate, Pose};
+use crate::camera::{Camera, Degenerate};
 use crate::timeline::Timeline;
-use std::fmt::Write;
 
 /// Instants an open interval is divided into. With 256, the ghosts of a streak up to 256
 /// pixels long stay within a pixel of each other: a continuous blur.
@@ -55,6 +54,8 @@ pub struct NoCamera {
     pub time: f64,
     pub reason: Degenerate,
 }
+
+impl std::error::Error for NoCamera {}
 
 impl std::fmt::Display for NoCamera {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
@@ -104,32 +105,6 @@ pub fn camera_at(timeline: &Timeline, t: f64) -> Result<Camera, NoCamera> {
     Camera::new(&pose)
         .map(|c| c.with_lens(lens))
         .map_err(|reason| NoCamera { time: t, reason })
-}
-
-/// Frame `n`'s camera as text for its fingerprint: its pose at the frame time (exactly the text
-/// frames without lens or shutter have always been fingerprinted with), then the lens when its
-/// aperture is open and every camera of the open interval when the camera moves during it.
-pub fn describe(timeline: &Timeline, shutter: Option<Shutter>, n: u64) -> String {
-    let pose: Pose = timeline.pose_of(n);
-    let mut text = format!("{pose:?}");
-    match Exposure::of_frame(timeline, shutter, n) {
-        Ok(e) => {
-            if e.camera.lens_radius > 0.0 {
-                let _ = write!(
-                    text,
-                    " lens {:?} {:?}",
-                    e.camera.lens_radius, e.camera.focus_distance
-                );
-            }
-            for c in &e.instants {
-                let _ = write!(text, " {c:?}");
-            }
-        }
-        Err(e) => {
-            let _ = write!(text, " no camera {e}");
-        }
-    }
-    text
 }
 
 #[cfg(test)]

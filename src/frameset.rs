@@ -353,7 +353,7 @@ mod tests {
             if !set.is_empty() {
                 assert_eq!(
                     spec.unwrap()
-                        .frames(200)
+                        .frames(0, 199)
                         .unwrap()
                         .iter()
                         .collect::<Vec<_>>(),

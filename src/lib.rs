@@ -1,7 +1,6 @@
 //! rayreel: sequence file → validated scene + timeline → per-frame camera → tracer → frame
 //! buffer → sinks. `run` is the whole program behind the command line.
 
-pub mod bench;
 pub mod camera;
 pub mod claim;
 pub mod cli;
@@ -9,15 +8,15 @@ pub mod console;
 pub mod exposure;
 pub mod frame;
 pub mod frameset;
-pub mod measure;
 pub mod output;
 pub mod plan;
-pub mod preview;
 pub mod progress;
 pub mod scene;
 pub mod schedule;
 pub mod sequence;
+pub mod signals;
 pub mod timeline;
+pub mod tools;
 pub mod tracer;
 pub mod transfer;
 
@@ -37,6 +36,9 @@ pub enum Error {
     /// Rendering or writing failed (exit 1).
     #[error("{0}")]
     Failed(String),
+    /// A run stopped short: a frame could not be rendered, encoded or written (exit 1).
+    #[error(transparent)]
+    Run(#[from] schedule::RunError),
     /// `status` found frames that are not up to date (exit 1).
     #[error("{0}")]
     Incomplete(String),
@@ -49,7 +51,7 @@ impl Error {
     pub fn exit_code(&self) -> u8 {
         match self {
             Error::Load(_) | Error::Usage(_) => 2,
-            Error::Failed(_) | Error::Incomplete(_) => 1,
+            Error::Failed(_) | Error::Run(_) | Error::Incomplete(_) => 1,
             Error::Interrupted(_, code) => *code,
         }
     }

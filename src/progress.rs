@@ -4,7 +4,9 @@
 
 use crate::claim::Held;
 use crate::console::printable;
+use crate::plan::Plan;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::cell::Cell;
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 
@@ -15,6 +17,9 @@ pub struct Progress {
     /// Frames in the whole sequence, for the `frame n/N` lines.
     sequence_frames: u64,
     done: u64,
+    /// Frames reported up to date or foreign, and frames that failed.
+    skipped: Cell<u64>,
+    failed: Cell<u64>,
     start: Instant,
 }
 
@@ -39,12 +44,15 @@ impl Progress {
             total,
             sequence_frames,
             done: 0,
+            skipped: Cell::new(0),
+            failed: Cell::new(0),
             start: Instant::now(),
         }
     }
 
     /// One JSON object per line on stderr, for render farms.
     pub fn json(total: u64, sequence_frames: u64) -> Progress {
+        crate::console::set_json(true);
         Progress {
             mode: Mode::Json,
             ..Progress::new(total, sequence_frames, true)
@@ -59,6 +67,41 @@ impl Progress {
         }
     }
 
+    /// The plan before the first frame: `48 frames: 30 up to date, 18 missing → rendering 18`,
+    /// or in JSON a `start` event with the count of every state (streams without files have
+    /// no plan: every selected frame is rendered).
+    pub fn start(&self, plan: Option<&Plan>, selected: u64) {
+        let Mode::Json = self.mode else {
+            return plan.into_iter().for_each(|p| self.note(&p.summary()));
+        };
+        let counts = plan.map_or(String::new(), |p| {
+            let states = p
+                .by_state()
+                .map(|(what, set)| format!(", \"{}\": {}", what.replace(' ', "_"), set.len()));
+            states.concat()
+        });
+        eprintln!(
+            "{{\"event\": \"start\", \"selected\": {selected}, \"rendering\": {}{counts}, \"sequence_frames\": {}}}",
+            self.total, self.sequence_frames
+        );
+    }
+
+    /// The first Ctrl-C or SIGTERM: said at once, whatever the mode.
+    pub fn interrupt(&self, signal: &str, in_flight: usize, text: &str) {
+        match &self.mode {
+            Mode::Json => eprintln!(
+                "{{\"event\": \"interrupt\", \"signal\": \"{signal}\", \"in_flight\": {in_flight}, \"done\": {}, \"text\": {}}}",
+                self.done,
+                quote(text)
+            ),
+            Mode::Bar(bar) => {
+                bar.set_message("stopping");
+                bar.println(printable(text));
+            }
+            _ => eprintln!("{}", printable(text)),
+        }
+    }
+
     /// A line for the user that is not about one frame (plans).
     pub fn note(&self, text: &str) {
         match &self.mode {
@@ -66,6 +109,15 @@ impl Progress {
             Mode::Lines => eprintln!("{}", printable(text)),
             Mode::Json => eprintln!("{{\"event\": \"note\", \"text\": {}}}", quote(text)),
             Mode::Bar(bar) => bar.println(printable(text)),
+        }
+    }
+
+    /// A command line the user asked for (`--print-ffmpeg`): shown even with `--quiet`.
+    pub fn command(&self, text: &str) {
+        match &self.mode {
+            Mode::Bar(bar) => bar.println(printable(text)),
+            Mode::Json => eprintln!("{{\"event\": \"command\", \"text\": {}}}", quote(text)),
+            _ => eprintln!("{}", printable(text)),
         }
     }
 
@@ -132,10 +184,13 @@ impl Progress {
 
     /// A frame that needs no work (`up-to-date`) or may not be touched (`foreign`).
     pub fn frame_skipped(&self, n: u64, path: &str, status: &str) {
+        self.skipped.set(self.skipped.get() + 1);
         if let Mode::Json = self.mode {
             eprintln!(
-                "{{\"event\": \"frame\", \"frame\": {n}, \"path\": {}, \"status\": \"{status}\", \"seconds\": 0}}",
-                quote(path)
+                "{{\"event\": \"frame\", \"frame\": {n}, \"path\": {}, \"status\": \"{status}\", \"seconds\": 0, \"done\": {}, \"total\": {}}}",
+                quote(path),
+                self.done,
+                self.total
             );
         }
     }
@@ -144,35 +199,42 @@ impl Progress {
         self.done += 1;
         match &self.mode {
             Mode::Quiet => {}
+            // The frame's own number (from `first_frame`), then this run's count.
             Mode::Lines => eprintln!(
-                "frame {n}/{} written {} ({seconds:.2} s, {} of {} done)",
-                self.sequence_frames,
+                "frame {n} written {} ({seconds:.2} s, {} of {} done)",
                 printable(destination),
                 self.done,
                 self.total
             ),
             Mode::Json => eprintln!(
-                "{{\"event\": \"frame\", \"frame\": {n}, \"path\": {}, \"status\": \"written\", \"seconds\": {seconds:.4}}}",
-                quote(destination)
+                "{{\"event\": \"frame\", \"frame\": {n}, \"path\": {}, \"status\": \"written\", \"seconds\": {seconds:.3}, \"done\": {}, \"total\": {}}}",
+                quote(destination),
+                self.done,
+                self.total
             ),
             Mode::Bar(bar) => {
-                bar.set_message(printable(destination).into_owned());
+                if self.done == 1 {
+                    bar.set_style(style(true));
+                }
                 bar.inc(1);
             }
         }
     }
 
     pub fn frame_failed(&self, n: u64, error: &str) {
+        self.failed.set(self.failed.get() + 1);
         if let Mode::Json = self.mode {
             eprintln!(
-                "{{\"event\": \"frame\", \"frame\": {n}, \"status\": \"failed\", \"error\": {}}}",
-                quote(error)
+                "{{\"event\": \"frame\", \"frame\": {n}, \"status\": \"failed\", \"error\": {}, \"done\": {}, \"total\": {}}}",
+                quote(error),
+                self.done,
+                self.total
             );
         }
     }
 
     /// Clears the bar and prints the closing summary line.
-    pub fn finish(&self) {
+    pub fn finish(&self, interrupted: bool) {
         let wall = self.start.elapsed().as_secs_f64();
         let rate = if wall > 0.0 {
             self.done as f64 / wall
@@ -183,8 +245,11 @@ impl Progress {
             Mode::Quiet => return,
             Mode::Json => {
                 eprintln!(
-                    "{{\"event\": \"summary\", \"frames\": {}, \"seconds\": {wall:.3}, \"frames_per_second\": {rate:.3}}}",
-                    self.done
+                    "{{\"event\": \"summary\", \"frames\": {}, \"total\": {}, \"skipped\": {}, \"failed\": {}, \"interrupted\": {interrupted}, \"seconds\": {wall:.3}, \"frames_per_second\": {rate:.3}}}",
+                    self.done,
+                    self.total,
+                    self.skipped.get(),
+                    self.failed.get()
                 );
                 return;
             }
@@ -203,15 +268,38 @@ impl Progress {
 
 fn bar(total: u64) -> ProgressBar {
     let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{bar:40.cyan/blue} {pos}/{len} frames  {per_sec:.1}  eta {eta}  {msg}",
-        )
-        .expect("static template")
-        .progress_chars("##-"),
-    );
+    bar.set_style(style(false));
     bar.enable_steady_tick(Duration::from_millis(200));
     bar
+}
+
+/// The bar fills what the terminal's width leaves (`wide_bar`; the text beside it takes 40
+/// columns at most, so a 60-column terminal still has a bar and no wrapped line); the rate
+/// and the ETA appear once a frame is done (before that they would be guesses from nothing),
+/// and `stopping` once a signal came.
+fn style(timed: bool) -> ProgressStyle {
+    let template = match timed {
+        true => "{wide_bar:.cyan/blue} {pos}/{len} frames  {rate}  eta {eta} {msg}",
+        false => "{wide_bar:.cyan/blue} {pos}/{len} frames {msg}",
+    };
+    ProgressStyle::with_template(template)
+        .expect("static template")
+        .with_key(
+            "rate",
+            |s: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                let _ = write!(w, "{}", rate(s.per_sec()));
+            },
+        )
+        .progress_chars("##-")
+}
+
+/// `3.6 frames/s`, or `14 s/frame` when frames take longer than a second.
+pub fn rate(per_second: f64) -> String {
+    match per_second {
+        r if r >= 1.0 => format!("{r:.1} frames/s"),
+        r if r > 0.0 => format!("{:.1} s/frame", 1.0 / r),
+        _ => "0 frames/s".into(),
+    }
 }
 
 /// A JSON string literal.

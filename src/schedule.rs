@@ -5,7 +5,7 @@
 //! does all I/O: atomic file writes as frames finish, the stream strictly in frame order.
 
 use crate::claim::{Attempt, Claims};
-use crate::exposure::{self, Exposure};
+use crate::exposure::Exposure;
 use crate::frame::Frame;
 use crate::output::{
     self, FileFormat, FrameMeta, fingerprint, pattern::Pattern, stream::StreamFormat,
@@ -15,7 +15,10 @@ use crate::sequence::Sequence;
 use crate::tracer::{self, Settings, World};
 use std::collections::BTreeMap;
 use std::io::Write;
-use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use crate::signals::signal_name;
+pub use crate::signals::{install_interrupt_handler, interrupt_code, interrupted};
 use std::sync::{Arc, mpsc};
 use std::time::{Duration, Instant};
 
@@ -78,15 +81,58 @@ struct Delivery<'a> {
     held: Vec<u64>,
     /// Frames in flight under a claim, with when they were last refreshed.
     claimed: Vec<(u64, Instant)>,
-    stop: Option<Result<Outcome, String>>,
+    stop: Option<Result<Outcome, RunError>>,
     /// Set once the run stops: frames in flight give up at their next pixel.
     cancel: Arc<AtomicBool>,
     /// When a signal was noticed.
     signalled: Option<Instant>,
 }
 
+/// The tools around the pipeline (`measure`, `bench`) report failures as text.
+impl From<RunError> for String {
+    fn from(e: RunError) -> String {
+        e.to_string()
+    }
+}
+
 /// What a worker sends back: the frame's bytes, `None` if it was cancelled, or why it failed.
-type Produced = Result<Option<Done>, String>;
+type Produced = Result<Option<Done>, RunError>;
+
+/// Why a run stopped short of its frames (the command maps every one to exit 1).
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error("cannot start {threads} worker threads: {source}")]
+    Workers {
+        threads: usize,
+        source: rayon::ThreadPoolBuildError,
+    },
+    #[error("frame {frame}: {source}")]
+    Camera {
+        frame: u64,
+        source: crate::exposure::NoCamera,
+    },
+    #[error("{}: cannot encode: {message}", path.display())]
+    Encode {
+        path: std::path::PathBuf,
+        message: String,
+    },
+    #[error("frame {frame}: cannot encode the stream: {message}")]
+    EncodeStream { frame: u64, message: String },
+    #[error("{}: cannot write: {source}", path.display())]
+    Write {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: cannot create claim: {source}", path.display())]
+    Claim {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    #[error("stdout: cannot write the stream: {0}")]
+    Stream(std::io::Error),
+    #[error("worker lost: {0}")]
+    WorkerLost(mpsc::RecvTimeoutError),
+}
 
 /// How often the run looks at signals, claims and workers.
 const TICK: Duration = Duration::from_millis(100);
@@ -95,17 +141,17 @@ const TICK: Duration = Duration::from_millis(100);
 /// so this only matters while one is being encoded) before it leaves them behind.
 const STOP_GRACE: Duration = Duration::from_secs(2);
 
-pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, String> {
+pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, RunError> {
     run_on(&worker_pool(job.threads)?, job, progress)
 }
 
 /// The worker threads of a run; an error when the machine cannot start that many.
-pub fn worker_pool(threads: usize) -> Result<rayon::ThreadPool, String> {
+pub fn worker_pool(threads: usize) -> Result<rayon::ThreadPool, RunError> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .thread_name(|i| format!("rayreel-{i}"))
         .build()
-        .map_err(|e| format!("cannot start {threads} worker threads: {e}"))
+        .map_err(|source| RunError::Workers { threads, source })
 }
 
 /// `run` on threads already started (claim mode runs several passes on them).
@@ -113,7 +159,7 @@ pub fn run_on(
     pool: &rayon::ThreadPool,
     mut job: Job,
     progress: &mut Progress,
-) -> Result<Outcome, String> {
+) -> Result<Outcome, RunError> {
     return_frame_buffers_to_the_os();
     let window = match job.stream {
         // A stream has its order to keep: one frame rendering (on every thread) while the one
@@ -163,7 +209,7 @@ pub fn run_on(
                 d.deliver(frame, done);
             }
             Err(mpsc::RecvTimeoutError::Timeout) => {}
-            Err(e) => return Err(format!("worker lost: {e}")),
+            Err(e) => return Err(RunError::WorkerLost(e)),
         }
     }
     d.finish()
@@ -219,15 +265,20 @@ impl Delivery<'_> {
             1 => "the frame in flight is cancelled at the next pixel".to_string(),
             n => format!("the {n} frames in flight are cancelled at the next pixel"),
         };
-        self.progress.warn(&format!(
-            "rayreel: stopping on {}: {what}; frames already written stay; exit code {} follows (a second signal exits at once)",
+        let again = match signal_name() {
+            "SIGINT" => "Ctrl-C again to abort at once",
+            _ => "a second signal aborts at once",
+        };
+        let text = format!(
+            "rayreel: stopping on {}: {what}; frames already written stay; exit code {} follows ({again})",
             signal_name(),
             interrupt_code()
-        ));
+        );
+        self.progress.interrupt(signal_name(), in_flight, &text);
     }
 
     /// The run's outcome; claims still held for frames left behind are released.
-    fn finish(mut self) -> Result<Outcome, String> {
+    fn finish(mut self) -> Result<Outcome, RunError> {
         self.cancel.store(true, Ordering::SeqCst);
         for (n, _) in self.claimed.clone() {
             self.release(n);
@@ -262,7 +313,7 @@ impl Delivery<'_> {
             Err(e) => {
                 let path = Claims::path(&files.pattern.frame_path(n));
                 self.stop
-                    .get_or_insert(Err(format!("{}: cannot create claim: {e}", path.display())));
+                    .get_or_insert(Err(RunError::Claim { path, source: e }));
                 false
             }
         }
@@ -294,7 +345,7 @@ impl Delivery<'_> {
             Ok(None) => return self.release(frame),
             Err(e) => {
                 self.release(frame);
-                self.progress.frame_failed(frame, &e);
+                self.progress.frame_failed(frame, &e.to_string());
                 self.stop.get_or_insert(Err(e));
                 self.cancel.store(true, Ordering::SeqCst);
                 return;
@@ -304,9 +355,9 @@ impl Delivery<'_> {
             let path = files.pattern.frame_path(frame);
             let result = output::atomic::write_atomic(&path, bytes);
             self.release(frame);
-            if let Err(e) = result {
-                let e = format!("{}: cannot write: {e}", path.display());
-                self.progress.frame_failed(frame, &e);
+            if let Err(source) = result {
+                let e = RunError::Write { path, source };
+                self.progress.frame_failed(frame, &e.to_string());
                 self.stop.get_or_insert(Err(e));
                 self.cancel.store(true, Ordering::SeqCst);
                 return;
@@ -335,15 +386,14 @@ impl Delivery<'_> {
             // A signal came while the reader was not reading: `notice_signal` takes it up.
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
             Err(e) => {
-                self.stop
-                    .get_or_insert(Err(format!("stdout: cannot write the stream: {e}")));
+                self.stop.get_or_insert(Err(RunError::Stream(e)));
             }
         }
     }
 }
 
 /// Renders frame `n` of the sequence (building its geometry; a run builds it once).
-pub fn render_frame(seq: &Sequence, n: u64) -> Result<Frame, String> {
+pub fn render_frame(seq: &Sequence, n: u64) -> Result<Frame, RunError> {
     render_with(&World::new(seq.scene.clone()), seq, n, &seq.settings)
 }
 
@@ -353,9 +403,9 @@ pub fn render_with(
     seq: &Sequence,
     n: u64,
     settings: &Settings,
-) -> Result<Frame, String> {
+) -> Result<Frame, RunError> {
     let exposure = Exposure::of_frame(&seq.timeline, settings.shutter, n)
-        .map_err(|e| format!("frame {n}: {e}"))?;
+        .map_err(|source| RunError::Camera { frame: n, source })?;
     Ok(tracer::render(world, &exposure, settings, n))
 }
 
@@ -372,7 +422,7 @@ fn produce(
     let start = Instant::now();
     let n = task.frame;
     let exposure = Exposure::of_frame(&seq.timeline, seq.settings.shutter, n)
-        .map_err(|e| format!("frame {n}: {e}"))?;
+        .map_err(|source| RunError::Camera { frame: n, source })?;
     let Some(frame) = tracer::render_or_stop(world, &exposure, &seq.settings, n, cancel) else {
         return Ok(None);
     };
@@ -382,7 +432,7 @@ fn produce(
             let path = files.pattern.frame_path(n);
             Some(
                 output::encode_file(&frame, &files.format, &meta)
-                    .map_err(|e| format!("{}: cannot encode: {e}", path.display()))?,
+                    .map_err(|message| RunError::Encode { path, message })?,
             )
         }
         None => None,
@@ -390,7 +440,7 @@ fn produce(
     let stream = match stream {
         Some((format, sixteen)) => Some(
             output::stream::encode(&frame, format, sixteen)
-                .map_err(|e| format!("frame {n}: cannot encode the stream: {e}"))?,
+                .map_err(|message| RunError::EncodeStream { frame: n, message })?,
         ),
         None => None,
     };
@@ -407,10 +457,7 @@ pub fn frame_meta(seq: &Sequence, n: u64, run_hash: &fingerprint::Hasher) -> Fra
         frame: n,
         time: seq.timeline.time_of(n),
         fps: seq.timeline.fps,
-        fingerprint: fingerprint::of_frame(
-            run_hash,
-            &exposure::describe(&seq.timeline, seq.settings.shutter, n),
-        ),
+        fingerprint: fingerprint::of_frame(run_hash, n, &seq.timeline, seq.settings.shutter),
         matrices: crate::camera::Camera::new(&seq.timeline.pose_of(n))
             .ok()
             .map(|c| c.exr_matrices(seq.settings.width, seq.settings.height)),
@@ -495,50 +542,6 @@ impl StreamWriter {
                 Err(mpsc::RecvTimeoutError::Timeout) => {}
                 Err(mpsc::RecvTimeoutError::Disconnected) => return Err(gone()),
             }
-        }
-    }
-}
-
-/// The first Ctrl-C (SIGINT) or SIGTERM, 0 before one comes.
-static SIGNAL: AtomicI32 = AtomicI32::new(0);
-
-pub fn interrupted() -> bool {
-    SIGNAL.load(Ordering::SeqCst) != 0
-}
-
-/// The exit code for the signal that came: 128 + its number (130 SIGINT, 143 SIGTERM).
-pub fn interrupt_code() -> u8 {
-    (128 + SIGNAL.load(Ordering::SeqCst)).clamp(0, 255) as u8
-}
-
-fn signal_name() -> &'static str {
-    match SIGNAL.load(Ordering::SeqCst) {
-        libc::SIGTERM => "SIGTERM",
-        _ => "SIGINT",
-    }
-}
-
-/// The first Ctrl-C or SIGTERM asks the run to stop: frames in flight are cancelled, the
-/// finished ones stay. A second one exits at once with 128 + its number (a later run removes
-/// any temporary file that leaves behind).
-pub fn install_interrupt_handler() {
-    extern "C" fn on_signal(signal: libc::c_int) {
-        if SIGNAL
-            .compare_exchange(0, signal, Ordering::SeqCst, Ordering::SeqCst)
-            .is_err()
-        {
-            // SAFETY: _exit is async-signal-safe.
-            unsafe { libc::_exit(128 + signal) };
-        }
-    }
-    for signal in [libc::SIGINT, libc::SIGTERM] {
-        // SAFETY: installs a handler that only touches an atomic and calls _exit.
-        unsafe {
-            let mut action: libc::sigaction = std::mem::zeroed();
-            action.sa_sigaction = on_signal as *const () as usize;
-            action.sa_flags = libc::SA_RESTART;
-            libc::sigemptyset(&mut action.sa_mask);
-            libc::sigaction(signal, &action, std::ptr::null_mut());
         }
     }
 }

@@ -101,12 +101,12 @@ fn messages_read_well_whatever_the_file_holds() {
     assert!(out.status.success(), "a byte-order mark: {}", stderr(&out));
 
     let keys = "  keyframes:\n    - { time: 0 }\n";
-    let tagged = format!("{STILL}timeline:\n  fps: !!float \"24\"\n  duration: 1\n{keys}");
+    let tagged = format!("{STILL}timeline:\n  fps: 24\n  duration: !!float \"1\"\n{keys}");
     let out = check(&tmp, "tagged.yaml", &tagged);
     assert_eq!(out.status.code(), Some(2));
     assert!(
-        stderr(&out).contains("tagged.yaml:8:8: timeline.fps:")
-            && stderr(&out).contains("write it plainly, without tag or quotes: `fps: 24`"),
+        stderr(&out).contains("tagged.yaml:9:13: timeline.duration:")
+            && stderr(&out).contains("write it plainly, without tag or quotes: `duration: 1`"),
         "{}",
         stderr(&out)
     );

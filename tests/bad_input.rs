@@ -56,16 +56,16 @@ fn bad_flags_exit_2_with_the_flag_named() {
     for (args, needle) in [
         (
             vec!["--size", "0x10"],
-            "--size: width must be 1 to 16384 pixels (got 0)",
+            "rayreel: invalid value '0x10' for '--size <WxH>': width must be 1 to 16384 pixels (got 0)",
         ),
         (
             vec!["--size", "100000x100000"],
-            "--size: width must be 1 to 16384 pixels (got 100000)",
+            "'--size <WxH>': width must be 1 to 16384 pixels (got 100000)",
         ),
         (vec!["--size", "64"], "expected WIDTHxHEIGHT"),
         (
             vec!["--max-depth", "0"],
-            "--max-depth: must be 1 (no reflections)",
+            "rayreel: invalid value '0' for '--max-depth <N>': 0 is not in 1..=10000",
         ),
         (
             vec!["--frames", "3"],

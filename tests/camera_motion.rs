@@ -4,7 +4,7 @@
 
 mod common;
 use common::*;
-use rayreel::sequence::{self, Overrides};
+use rayreel::sequence;
 use std::path::Path;
 
 /// One line of `rayreel camera --format csv`.
@@ -133,7 +133,7 @@ fn keys_are_passed_at_their_times_and_never_backwards() {
     let dir = scratch("motion-keys");
     for keys in PATHS {
         let yaml = keyed(24, "", keys);
-        let seq = sequence::parse(Path::new("k.yaml"), &yaml, &Overrides::default()).unwrap();
+        let seq = sequence::parse(Path::new("k.yaml"), &yaml).unwrap();
         let rayreel::timeline::Path::Keys(k) = &seq.timeline.path else {
             panic!()
         };
@@ -238,7 +238,7 @@ fn the_film_ends_on_its_last_key() {
     // are named in a warning by check, camera and render.
     let (rows, err) = camera(&dir, &keyed(24, "  duration: 1.5\n", &keys));
     assert_eq!(rows.len(), 36);
-    let warning = "warning: timeline.duration: 1.5 s at 24 fps ends with frame 35 (t = 1.4583333333333333 s), so keyframe 2 (t = 2.5 s) is never shown; remove `duration` to end on the last keyframe";
+    let warning = "warning: timeline.duration: 1.5 s at 24 fps ends with frame 35 (t = 1.45833 s), so keyframe 2 (t = 2.5 s) is never shown; remove `duration` to end on the last keyframe";
     assert!(err.contains(warning), "{err}");
     for command in ["check", "render"] {
         let out = run_in(

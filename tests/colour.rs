@@ -19,7 +19,7 @@ lights:
   - ambient: { color: [0.3, 0.3, 0.3] }
 ";
 
-fn setup(name: &str) -> std::path::PathBuf {
+fn setup(name: &str) -> Scratch {
     let tmp = scratch(name);
     std::fs::write(tmp.join("s.yaml"), SCENE).unwrap();
     tmp

@@ -11,7 +11,7 @@ fn seq() -> String {
     sequence(96, 54, &orbit(24, 2.0))
 }
 
-fn setup(name: &str) -> std::path::PathBuf {
+fn setup(name: &str) -> Scratch {
     with_clean_render(name, &seq())
 }
 

@@ -50,7 +50,7 @@ impl Drop for Tmpfs {
     }
 }
 
-fn setup(name: &str) -> std::path::PathBuf {
+fn setup(name: &str) -> Scratch {
     with_clean_render(name, &seq())
 }
 

@@ -9,14 +9,13 @@ use glam::DVec3;
 use rayreel::camera::{Degenerate, Pose};
 use rayreel::exposure::{Exposure, INSTANTS, Shutter};
 use rayreel::frame::Frame;
-use rayreel::sequence::{self, Overrides, Sequence};
+use rayreel::sequence::{self, Sequence};
 use rayreel::timeline::{Ease, Interpolation, Key, Keyed, Path as TimelinePath, Speed, Timeline};
 use rayreel::tracer::{self, Adaptive, Kernel, Settings, World};
 use std::path::Path;
 
 fn parse(yaml: &str) -> Sequence {
-    sequence::parse(Path::new("test.yaml"), yaml, &Overrides::default())
-        .unwrap_or_else(|e| panic!("{e}\n{yaml}"))
+    sequence::parse(Path::new("test.yaml"), yaml).unwrap_or_else(|e| panic!("{e}\n{yaml}"))
 }
 
 /// A camera panning fast across the test scene: about 9 pixels a frame at 96 px wide.
@@ -31,15 +30,31 @@ fn panning(extra_render: &str) -> String {
     sequence(96, 54, keys).replacen("render: {", &format!("render: {{ {extra_render}"), 1)
 }
 
-/// Renders `yaml` to PNGs in a fresh directory with `args`; returns the directory.
-fn render_pngs(name: &str, yaml: &str, args: &[&str]) -> std::path::PathBuf {
+/// Rendered frames: the `out` directory of a scratch directory that lives as long as this.
+struct Rendered {
+    _scratch: Scratch,
+    out: std::path::PathBuf,
+}
+
+impl std::ops::Deref for Rendered {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.out
+    }
+}
+
+/// Renders `yaml` to PNGs in a fresh directory with `args`; returns the frames' directory.
+fn render_pngs(name: &str, yaml: &str, args: &[&str]) -> Rendered {
     let tmp = scratch(name);
     std::fs::write(tmp.join("seq.yaml"), yaml).unwrap();
     let mut all = vec!["render", "seq.yaml", "-q", "-o", "out/f_####.png"];
     all.extend(args);
     let out = run_in(&tmp, &all);
     assert!(out.status.success(), "{}", stderr(&out));
-    tmp.join("out")
+    Rendered {
+        out: tmp.join("out"),
+        _scratch: tmp,
+    }
 }
 
 /// Pixels of every frame in `dir`, in frame order.
@@ -440,6 +455,7 @@ fn a_camera_impossible_while_the_shutter_is_open_fails_that_frame() {
             Interpolation::Linear,
             Speed::Keys,
         ))),
+        clock: Default::default(),
     };
     let shutter = Shutter {
         angle: 360.0,

@@ -6,14 +6,14 @@
 use glam::DVec3;
 use rayreel::frame::Frame;
 use rayreel::scene::{Material, Shape};
-use rayreel::sequence::{self, Overrides};
+use rayreel::sequence;
 use rayreel::tracer::glass::scatter_one;
 use rayreel::tracer::intersect::{Ray, intersect};
 use std::path::Path;
 
 fn render(yaml: &str) -> Frame {
-    let seq = sequence::parse(Path::new("glass.yaml"), yaml, &Overrides::default())
-        .unwrap_or_else(|e| panic!("{e}\n{yaml}"));
+    let seq =
+        sequence::parse(Path::new("glass.yaml"), yaml).unwrap_or_else(|e| panic!("{e}\n{yaml}"));
     let frame = rayreel::schedule::render_frame(&seq, 0).unwrap();
     assert_eq!(frame.non_finite, 0);
     frame

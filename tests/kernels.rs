@@ -8,7 +8,7 @@ mod common;
 use common::{run_in, scratch, stderr};
 use glam::DVec3;
 use rayreel::scene::Shape;
-use rayreel::sequence::{self, Overrides};
+use rayreel::sequence;
 use rayreel::tracer::intersect::Ray;
 use rayreel::tracer::{Kernel, World};
 use std::path::Path;
@@ -212,7 +212,7 @@ fn every_width_traces_every_ray_as_the_scalar_kernel_does() {
         .chain(glass.map(|c| (c, true)));
     for (case, ((spheres, planes), glass)) in cases.enumerate() {
         let text = scene(&mut rng, spheres, planes, glass);
-        let seq = sequence::parse(Path::new("random.yaml"), &text, &Overrides::default())
+        let seq = sequence::parse(Path::new("random.yaml"), &text)
             .unwrap_or_else(|e| panic!("{e}\n{text}"));
         let world = World::new(seq.scene.clone());
         // Not a multiple of any width, so the last packet has idle lanes.

@@ -12,10 +12,11 @@
 
 use glam::DVec3;
 use rayreel::camera::{Camera, screen_point};
+use rayreel::cli::parse_size;
 use rayreel::frame::Frame;
 use rayreel::scene::{Light, Object, Shape};
 use rayreel::schedule::render_frame;
-use rayreel::sequence::{self, Overrides, Sequence};
+use rayreel::sequence::{self, Sequence};
 use rayreel::timeline::{Keyed, Path as TimelinePath};
 use rayreel::tracer::intersect::{Ray, intersect, nearest};
 use rayreel::tracer::shade::trace;
@@ -177,14 +178,36 @@ fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// The sequence, with one eye ray through each pixel centre unless `overrides` choose a
-/// sampling: the checks follow single rays.
-fn parse_with(yaml: &str, overrides: &Overrides) -> Sequence {
-    let mut o = overrides.clone();
-    if o.samples.is_none() && o.quality.is_none() {
-        o.samples = Some(1);
+/// What these tests change after loading, as `--size` and `--depth` do.
+#[derive(Debug, Clone, Copy, Default)]
+struct Overrides {
+    size: Option<(u32, u32)>,
+    depth: bool,
+}
+
+/// One eye ray through each pixel centre unless the file chooses a sampling (it has the
+/// default's): the checks follow single rays.
+fn apply(mut seq: Sequence, o: &Overrides) -> Sequence {
+    let default = seq.quality.is_none()
+        && seq.settings.samples == sequence::DEFAULT_SAMPLES
+        && seq
+            .settings
+            .adaptive
+            .is_some_and(|a| a.max_samples == sequence::DEFAULT_SAMPLING_MAX);
+    if default {
+        (seq.settings.samples, seq.settings.adaptive) = (1, None);
     }
-    sequence::parse(Path::new("numerics.yaml"), yaml, &o).unwrap_or_else(|e| panic!("{e}\n{yaml}"))
+    if let Some((w, h)) = o.size {
+        (seq.settings.width, seq.settings.height) = (w, h);
+    }
+    seq.settings.depth |= o.depth;
+    seq
+}
+
+fn parse_with(yaml: &str, overrides: &Overrides) -> Sequence {
+    let seq =
+        sequence::parse(Path::new("numerics.yaml"), yaml).unwrap_or_else(|e| panic!("{e}\n{yaml}"));
+    apply(seq, overrides)
 }
 
 fn parse(yaml: &str) -> Sequence {
@@ -192,7 +215,10 @@ fn parse(yaml: &str) -> Sequence {
 }
 
 fn load(path: &Path, overrides: &Overrides) -> Sequence {
-    sequence::load(path, overrides).unwrap_or_else(|e| panic!("{e}"))
+    apply(
+        sequence::load(path).unwrap_or_else(|e| panic!("{e}")),
+        overrides,
+    )
 }
 
 /// Frame `n`, asserting the tracer never had to replace a NaN or an infinity.
@@ -291,11 +317,11 @@ fn transform(seq: &mut Sequence, s: f64, offset: DVec3) {
     }
 }
 
-fn talk(size: (u64, u64)) -> Sequence {
+fn talk((w, h): (u64, u64)) -> Sequence {
     load(
         &repo().join("sequences/talk.yaml"),
         &Overrides {
-            size: Some(size),
+            size: Some((w as u32, h as u32)),
             ..Overrides::default()
         },
     )
@@ -1015,7 +1041,7 @@ lights:
 objects:
   - sphere: { center: [0, 0, -1], radius: 0.5, material: { diffuse: [1, 1, 1], shininess: 1e7 } }
 ";
-    let err = sequence::parse(Path::new("s.yaml"), yaml, &Overrides::default())
+    let err = sequence::parse(Path::new("s.yaml"), yaml)
         .expect_err("shininess 1e7 must be rejected")
         .to_string();
     assert!(err.contains("shininess"), "{err}");
@@ -1187,30 +1213,16 @@ lights:
 #[test]
 fn sizes_beyond_the_limit_are_rejected_before_allocating() {
     let base = "camera: { position: [0, 0, 1], look_at: [0, 0, 0] }\n";
-    for (w, h) in [
-        (70_000u64, 70_000u64),
-        (100_000, 1),
-        (1, 100_000),
-        (16_385, 16_384),
-        (0, 10),
-    ] {
-        let err = sequence::parse(
-            Path::new("s.yaml"),
-            base,
-            &Overrides {
-                size: Some((w, h)),
-                ..Overrides::default()
-            },
-        )
-        .expect_err("oversized --size accepted")
-        .to_string();
-        assert!(err.contains("--size"), "{err}");
+    // `--size` is checked as the command line is parsed.
+    for size in ["70000x70000", "100000x1", "1x100000", "16385x16384", "0x10"] {
+        let err = parse_size(size).expect_err("oversized --size accepted");
+        assert!(err.contains("pixels"), "{err}");
     }
     // 70000 × 70000 = 4.9e9 pixels: more than u32 holds.
     assert!(70_000u64 * 70_000 > u64::from(u32::MAX));
     for key in ["width: 100000", "height: 100000", "width: 4294967296"] {
         let yaml = format!("render: {{ {key} }}\n{base}");
-        let err = sequence::parse(Path::new("s.yaml"), &yaml, &Overrides::default())
+        let err = sequence::parse(Path::new("s.yaml"), &yaml)
             .expect_err("oversized render size accepted")
             .to_string();
         let field = key.split(':').next().unwrap();
@@ -1218,21 +1230,8 @@ fn sizes_beyond_the_limit_are_rejected_before_allocating() {
     }
     // The largest accepted sizes load (nothing is allocated before rendering): 16384 on a
     // side, and width × height up to 2^26 pixels.
-    let seq = parse_with(
-        base,
-        &Overrides {
-            size: Some((16_384, 4096)),
-            ..Overrides::default()
-        },
-    );
-    assert_eq!((seq.settings.width, seq.settings.height), (16_384, 4096));
-    let too_many = Overrides {
-        size: Some((16_384, 16_384)),
-        ..Overrides::default()
-    };
-    let err = sequence::parse(Path::new("s.yaml"), base, &too_many)
-        .unwrap_err()
-        .to_string();
+    assert_eq!(parse_size("16384x4096"), Ok((16_384, 4096)));
+    let err = parse_size("16384x16384").unwrap_err();
     assert!(err.contains("268435456 pixels"), "{err}");
 }
 

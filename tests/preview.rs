@@ -4,14 +4,14 @@
 mod common;
 use common::*;
 
-use rayreel::preview::{self, SheetLayout};
 use rayreel::schedule::render_frame;
-use rayreel::sequence::{self, Overrides, Sequence};
+use rayreel::sequence::{self, Sequence};
 use rayreel::timeline::Path as TimelinePath;
+use rayreel::tools::preview::{self, SheetLayout};
 use std::path::Path;
 
 fn load(path: &Path) -> Sequence {
-    sequence::load(path, &Overrides::default()).unwrap()
+    sequence::load(path).unwrap()
 }
 
 fn stdout_lines(o: &std::process::Output) -> Vec<String> {

@@ -3,21 +3,32 @@
 //! `measure` writes parsable results.
 
 mod common;
+use clap::Parser;
 use common::*;
-use rayreel::measure::{self, compare};
-use rayreel::sequence::{self, Overrides, Quality};
+use rayreel::cli::{Cli, Command, job::Job};
+use rayreel::sequence::{self, Quality, Sequence};
+use rayreel::tools::measure::{self, compare};
 use rayreel::tracer::{Adaptive, Sampler, Settings};
+
+/// The orbit sequence as `rayreel render sequences/orbit.yaml ARGS` sees it.
+fn job(args: &[&str]) -> Sequence {
+    let file = repo().join("sequences/orbit.yaml");
+    let file = file.to_str().unwrap();
+    let line: Vec<&str> = ["rayreel", "render", file]
+        .into_iter()
+        .chain(args.iter().copied())
+        .collect();
+    match Cli::try_parse_from(line).unwrap().command {
+        Command::Render(r) => Job::new(&r.job).unwrap().seq,
+        _ => unreachable!(),
+    }
+}
 
 /// Frame 0 of orbit.yaml without its shutter: these tests measure how samples resolve the
 /// edges of one instant, which motion blur would smear.
-fn orbit(size: (u64, u64)) -> rayreel::sequence::Sequence {
+fn orbit((w, h): (u64, u64)) -> Sequence {
     // One uniform sample to start from: each test sets the sampling it measures.
-    let o = Overrides {
-        size: Some(size),
-        samples: Some(1),
-        ..Overrides::default()
-    };
-    let mut seq = sequence::load(&repo().join("sequences/orbit.yaml"), &o).unwrap();
+    let mut seq = job(&["--size", &format!("{w}x{h}"), "--samples", "1"]);
     seq.settings.shutter = None;
     seq
 }
@@ -154,12 +165,8 @@ fn presets_trade_cost_for_accuracy_in_order() {
         .to_rgb8();
     let mut last: Option<(u64, f64)> = None;
     for q in [Quality::Draft, Quality::Preview, Quality::Final] {
-        let o = Overrides {
-            size: Some((160, 90)),
-            quality: Some(q),
-            ..Overrides::default()
-        };
-        let mut seq = sequence::load(&repo().join("sequences/orbit.yaml"), &o).unwrap();
+        let name = format!("{q:?}").to_lowercase();
+        let mut seq = job(&["--size", "160x90", "--quality", &name]);
         if q == Quality::Draft {
             // Draft halves the resolution unless a size is given; measure it at half size.
             seq.settings.width = 80;
@@ -197,29 +204,14 @@ fn upscale(rgb: &[u8], hw: u32, w: u32, h: u32) -> Vec<u8> {
 
 #[test]
 fn draft_halves_the_size_unless_a_size_is_given() {
-    let file = repo().join("sequences/orbit.yaml");
-    let draft = Overrides {
-        quality: Some(Quality::Draft),
-        ..Overrides::default()
-    };
-    let s = sequence::load(&file, &draft).unwrap().settings;
+    let s = job(&["--quality", "draft"]).settings;
     assert_eq!(
         (s.width, s.height, s.samples, s.max_depth),
         (640, 360, 1, 2)
     );
-    let sized = Overrides {
-        size: Some((100, 50)),
-        max_depth: Some(4),
-        ..draft
-    };
-    let s = sequence::load(&file, &sized).unwrap().settings;
+    let s = job(&["--quality", "draft", "--size", "100x50", "--max-depth", "4"]).settings;
     assert_eq!((s.width, s.height, s.max_depth), (100, 50, 4));
-    let fin = Overrides {
-        quality: Some(Quality::Final),
-        samples: Some(9),
-        ..Overrides::default()
-    };
-    let s = sequence::load(&file, &fin).unwrap().settings;
+    let s = job(&["--quality", "final", "--samples", "9"]).settings;
     assert_eq!((s.samples, s.adaptive, s.max_depth), (9, None, 5));
 }
 

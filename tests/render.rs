@@ -3,7 +3,7 @@
 
 mod common;
 use common::*;
-use rayreel::sequence::{self, Overrides};
+use rayreel::sequence;
 use std::path::Path;
 
 #[test]
@@ -33,13 +33,9 @@ fn talk_renders_one_png_of_the_requested_size() {
 
 /// Renders `yaml` (a 1×1 image unless it says otherwise) and returns pixel (0, 0) as floats.
 fn pixel(yaml: &str) -> [f32; 3] {
+    let mut seq = sequence::parse(Path::new("test.yaml"), yaml).unwrap_or_else(|e| panic!("{e}"));
     // One ray through the pixel centre, whose value the formulas give.
-    let centre = Overrides {
-        samples: Some(1),
-        ..Overrides::default()
-    };
-    let seq =
-        sequence::parse(Path::new("test.yaml"), yaml, &centre).unwrap_or_else(|e| panic!("{e}"));
+    (seq.settings.samples, seq.settings.adaptive) = (1, None);
     let frame = rayreel::schedule::render_frame(&seq, 0).unwrap();
     frame.pixel(0, 0)
 }

@@ -3,7 +3,7 @@
 
 mod common;
 use common::*;
-use rayreel::sequence::{self, Overrides};
+use rayreel::sequence;
 
 fn orbit() -> String {
     repo()
@@ -66,15 +66,8 @@ lights:
         assert_eq!(names, ["B", "G", "R", "Z"]);
         assert_eq!(img.layer_data[0].size, exr::math::Vec2(9, 5));
 
-        let seq = sequence::parse(
-            &tmp.join("s.yaml"),
-            yaml,
-            &Overrides {
-                depth: true,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let mut seq = sequence::parse(&tmp.join("s.yaml"), yaml).unwrap();
+        seq.settings.depth = true;
         let frame = rayreel::schedule::render_frame(&seq, 0).unwrap();
         let centre = 2 * 9 + 4;
         let want = frame.pixel(2, 4)[0];

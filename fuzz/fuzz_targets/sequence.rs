@@ -2,11 +2,11 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use rayreel::sequence::{Overrides, parse};
+use rayreel::sequence::parse;
 use std::path::Path;
 
 fuzz_target!(|data: &[u8]| {
     if let Ok(text) = std::str::from_utf8(data) {
-        let _ = parse(Path::new("fuzz.yaml"), text, &Overrides::default());
+        let _ = parse(Path::new("fuzz.yaml"), text);
     }
 });

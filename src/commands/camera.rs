@@ -6,21 +6,21 @@
 use super::print_warnings;
 use crate::Error;
 use crate::cli::{CameraArgs, CameraFormat};
-use crate::sequence::{self, Overrides, Sequence};
+use crate::sequence::{self, Sequence};
 use glam::DVec3;
 use std::io::Write;
 
 const CSV_HEADER: &str = "frame,time,position_x,position_y,position_z,look_at_x,look_at_y,look_at_z,up_x,up_y,up_z,fov,speed,focus_distance";
 
 pub fn camera(args: CameraArgs) -> Result<(), Error> {
-    let seq = sequence::load(&args.file, &Overrides::default())?;
+    let seq = sequence::load(&args.file)?;
     print_warnings(&seq);
-    let count = seq.timeline.frame_count;
+    let (first, last) = (seq.timeline.first_frame(), seq.timeline.last_frame());
     let frames = match &args.frames {
         Some(spec) => spec
-            .frames(count)
+            .frames(first, last)
             .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
-        None => crate::frameset::FrameSet::range(0, count - 1, 1),
+        None => crate::frameset::FrameSet::range(first, last, 1),
     };
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     let mut lines = frames.iter().map(|n| line(&seq, n, args.format));

@@ -8,7 +8,7 @@ use crate::cli::{BenchArgs, CheckArgs, Cli, Command, MeasureArgs, PreviewArgs};
 use crate::console::{self, printable};
 use crate::output;
 use crate::scene::{Light, Shape};
-use crate::sequence::{self, Overrides, Sequence};
+use crate::sequence::{self, Sequence};
 use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
 use std::path::Path;
 
@@ -28,7 +28,7 @@ pub fn run(cli: Cli) -> Result<(), Error> {
 /// the camera inside an object.
 fn warnings(seq: &Sequence) -> Vec<String> {
     let mut all = seq.warnings.clone();
-    all.extend(crate::preview::inside_warnings(seq));
+    all.extend(crate::tools::preview::inside_warnings(seq));
     all
 }
 
@@ -42,13 +42,13 @@ fn print_warnings(seq: &Sequence) {
 /// camera path go to stderr. A path whose camera cannot be built somewhere is still drawn,
 /// with the reason, and then reported as the load error it is (exit 2).
 fn preview(args: PreviewArgs) -> Result<(), Error> {
-    use crate::preview;
-    let (seq, problem) = sequence::load_drawable(&args.file, &Overrides::default())?;
-    let count = seq.timeline.frame_count;
-    let frames = match &args.frames {
+    use crate::tools::preview;
+    let (seq, problem) = sequence::load_drawable(&args.file)?;
+    let (first, last) = (seq.timeline.first_frame(), seq.timeline.last_frame());
+    let frames: Vec<u64> = match &args.frames {
         Some(spec) => {
             let set = spec
-                .frames(count)
+                .frames(first, last)
                 .map_err(|e| Error::Usage(format!("--frames: {e}")))?;
             if set.len() > preview::MAX_TILES {
                 return Err(Error::Usage(format!(
@@ -59,11 +59,12 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
             }
             set.iter().collect()
         }
-        None => preview::evenly_spaced(count, args.tiles),
+        None => preview::evenly_spaced(seq.timeline.frame_count, args.tiles)
+            .into_iter()
+            .map(|n| n + first)
+            .collect(),
     };
-    let dir = args
-        .out
-        .unwrap_or_else(|| Path::new("frames").join(&seq.name).join("preview"));
+    let dir = args.out.unwrap_or_else(|| beside_frames(&seq, "preview"));
     std::fs::create_dir_all(&dir)
         .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
     let reason = problem.as_ref().map(|p| p.to_string());
@@ -83,7 +84,7 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
 }
 
 fn check(args: CheckArgs) -> Result<(), Error> {
-    let seq = sequence::load(&args.file, &Overrides::default())?;
+    let seq = sequence::load(&args.file)?;
     print_warnings(&seq);
     let (cost, warning) = cost(&seq, seq.timeline.frame_count);
     if let Some(w) = warning {
@@ -177,7 +178,11 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
         .collect();
     let t = &seq.timeline;
     let camera = match &t.path {
-        TimelinePath::Orbit(o) => format!("orbit of radius {} ({} turns)", o.radius, o.turns),
+        TimelinePath::Orbit(o) => format!(
+            "orbit of radius {} ({})",
+            sequence::num(o.radius),
+            noun(o.turns, "turn")
+        ),
         TimelinePath::Keys(k) if k.keys.len() == 1 => "still camera".to_string(),
         TimelinePath::Keys(k) => format!(
             "{} keyframes, {:?} interpolation",
@@ -188,8 +193,10 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
     };
     let s = &seq.settings;
     format!(
-        "{file}: ok\n  objects:    {} ({spheres} spheres, {planes} planes)\n  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {} at {} fps ({:.2} s), {camera}\n{}{}  output:     {}\n",
+        "{file}: ok\n  objects:    {} ({}, {})\n  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {} at {} fps ({} s{}), {camera}\n{}{}  output:     {}\n",
         scene.objects.len(),
+        noun(spheres as f64, "sphere"),
+        noun(planes as f64, "plane"),
         scene.materials.len(),
         scene.lights.len(),
         if light_list.is_empty() {
@@ -202,8 +209,12 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
         s.max_depth,
         picture(s),
         t.frame_count,
-        t.fps,
-        t.frame_count as f64 / t.fps,
+        t.fps_text(),
+        sequence::num(t.clock.duration.unwrap_or(t.frame_count as f64 / t.fps)),
+        match t.first_frame() {
+            0 => String::new(),
+            first => format!(", frames {first}-{}", t.last_frame()),
+        },
         timing(t),
         film(seq),
         printable(&seq.output)
@@ -217,17 +228,22 @@ fn picture(s: &crate::tracer::Settings) -> String {
             "{} to {} samples (adaptive, threshold {})",
             s.samples, a.max_samples, a.threshold
         ),
-        None => format!(
-            "{} sample{}",
-            s.samples,
-            if s.samples == 1 { "" } else { "s" }
-        ),
+        None => noun(f64::from(s.samples), "sample"),
     };
     let alpha = if s.alpha { ", alpha" } else { "" };
     format!(
         "{sampling}, {}, exposure {}{alpha}",
         s.encoding.name(),
         s.exposure
+    )
+}
+
+/// `3 spheres`, `1 plane`, `1.5 turns`.
+fn noun(n: f64, what: &str) -> String {
+    format!(
+        "{} {what}{}",
+        sequence::num(n),
+        if n == 1.0 { "" } else { "s" }
     )
 }
 
@@ -241,13 +257,13 @@ fn film(seq: &Sequence) -> String {
     if let Some(s) = seq.settings.shutter {
         parts.push(format!(
             "{}° shutter (open {:.4} s a frame, offset {})",
-            s.angle,
+            sequence::num(s.angle),
             s.angle / 360.0 / seq.timeline.fps,
-            s.offset
+            sequence::num(s.offset)
         ));
     }
     if widest > 0.0 {
-        parts.push(format!("lens aperture up to {widest}"));
+        parts.push(format!("lens aperture up to {}", sequence::num(widest)));
     }
     if parts.is_empty() {
         return String::new();
@@ -297,13 +313,12 @@ fn timing(t: &Timeline) -> String {
 }
 
 fn measure(args: MeasureArgs) -> Result<(), Error> {
-    let mut seq = sequence::load(&args.file, &Overrides::default())?;
-    let count = seq.timeline.frame_count;
-    if args.frame >= count {
+    let mut seq = sequence::load(&args.file)?;
+    let (first, last) = (seq.timeline.first_frame(), seq.timeline.last_frame());
+    if !(first..=last).contains(&args.frame) {
         return Err(Error::Usage(format!(
-            "--frame: frame {} is outside the timeline, which has frames 0-{}",
-            args.frame,
-            count - 1
+            "--frame: frame {} is outside the timeline, which has frames {first}-{last}",
+            args.frame
         )));
     }
     let (w, h) = match args.size {
@@ -314,20 +329,18 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
                 320,
                 (320.0 * f64::from(s.height) / f64::from(s.width))
                     .round()
-                    .max(1.0) as u64,
+                    .max(1.0) as u32,
             )
         }
     };
-    let o = Overrides {
-        size: Some((w, h)),
-        encoding: args.encoding,
-        ..Overrides::default()
-    };
-    seq = sequence::load(&args.file, &o)?;
+    (seq.settings.width, seq.settings.height) = (w, h);
+    if let Some(e) = args.encoding {
+        seq.settings.encoding = e;
+    }
     let dir = args
         .out
         .clone()
-        .unwrap_or_else(|| Path::new("frames").join(&seq.name).join("measure"));
+        .unwrap_or_else(|| beside_frames(&seq, "measure"));
     std::fs::create_dir_all(&dir)
         .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
     eprintln!(
@@ -335,10 +348,11 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
         args.frame,
         shown(&args.file)
     );
-    let report = crate::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
-        eprintln!("  {line}")
-    })
-    .map_err(Error::Failed)?;
+    let report =
+        crate::tools::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
+            eprintln!("  {line}")
+        })
+        .map_err(Error::Failed)?;
     out(&report.table())?;
     for (name, text) in [
         ("measure.csv", report.csv()),
@@ -354,16 +368,21 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
 }
 
 fn bench(args: BenchArgs) -> Result<(), Error> {
-    let options = crate::bench::Options {
+    let options = crate::tools::bench::Options {
         runs: args.runs as usize,
         only: args.only,
         quick: args.quick,
     };
     // A reader that has gone ends the output, not the benchmark's own error reporting.
-    crate::bench::run(&options, &mut |line| {
+    crate::tools::bench::run(&options, &mut |line| {
         let _ = console::print(&format!("{line}\n"));
     })
     .map_err(Error::Failed)
+}
+
+/// A folder `name` in the frames' directory (`frames/orbit/preview`).
+fn beside_frames(seq: &Sequence, name: &str) -> std::path::PathBuf {
+    crate::plan::directory(Path::new(&seq.output)).join(name)
 }
 
 /// A path as the terminal may show it (see `console::printable`).

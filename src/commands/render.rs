@@ -4,71 +4,16 @@
 use super::{out, shown};
 use crate::Error;
 use crate::claim::{self, Claims, Held};
-use crate::cli::{JobArgs, ProgressFormat, RenderArgs, StatusArgs, resolve_shard};
+use crate::cli::job::Job as JobSpec;
+use crate::cli::{ProgressFormat, RenderArgs};
 use crate::frameset::FrameSet;
-use crate::output::{self, FileFormat, pattern::Pattern, stream::StreamFormat};
+use crate::output::{self, stream::StreamFormat};
 use crate::plan::{self, Plan, State};
 use crate::progress::Progress;
-use crate::schedule::{self, Files, Job, Outcome, Task};
-use crate::sequence::{self, Overrides, Sequence};
+use crate::schedule::{self, Files, Job, Outcome, RunError, Task};
+use crate::sequence::Sequence;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-
-/// The validated sequence and this task's frames.
-fn load(job: &JobArgs) -> Result<(Sequence, FrameSet), Error> {
-    let overrides = Overrides {
-        size: job.size,
-        max_depth: job.max_depth,
-        output: job.output.clone(),
-        depth: job.depth,
-        samples: job.samples,
-        quality: job.quality,
-        encoding: job.encoding,
-        exposure: job.exposure,
-        alpha: job.alpha,
-    };
-    let seq = sequence::load(&job.file, &overrides)?;
-    let count = seq.timeline.frame_count;
-    let mut frames = match &job.frames {
-        Some(spec) => spec
-            .frames(count)
-            .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
-        None => FrameSet::range(0, count - 1, 1),
-    };
-    if let Some(spec) = job.shard {
-        let env = |name: &str| std::env::var(name).ok();
-        let (k, n) = resolve_shard(spec, job.shard_count, &env)
-            .map_err(|e| Error::Usage(format!("--shard: {e}")))?;
-        frames = frames.shard(k, n);
-    }
-    Ok((seq, frames))
-}
-
-/// The file pattern and format.
-fn file_sink(seq: &Sequence, job: &JobArgs) -> Result<Files, Error> {
-    let sixteen = job.bit_depth == "16";
-    let pattern = Pattern::new(&seq.output, seq.timeline.frame_count).map_err(Error::Usage)?;
-    let format = FileFormat::for_extension(
-        &pattern.extension(),
-        sixteen,
-        job.png_compression,
-        job.exr_precision,
-    )
-    .map_err(|e| Error::Usage(format!("output `{}`: {e}", seq.output)))?;
-    let exr = matches!(format, FileFormat::Exr { .. });
-    if exr && sixteen {
-        return Err(Error::Usage(
-            "--bit-depth 16 applies to PNG files and streams; EXR frames are float".into(),
-        ));
-    }
-    if seq.settings.depth && !exr {
-        return Err(Error::Usage(format!(
-            "--depth (render.depth) needs EXR frames to hold the Z channel; `{}` is not .exr",
-            seq.output
-        )));
-    }
-    Ok(Files { pattern, format })
-}
 
 /// Makes the frames' directory and removes this job's temporaries that processes which are
 /// gone left there.
@@ -81,13 +26,17 @@ fn prepare(files: &Files, frames: &FrameSet) -> Result<(), Error> {
 }
 
 pub fn render(args: RenderArgs) -> Result<(), Error> {
-    let (seq, frames) = load(&args.job)?;
-    let warnings = super::warnings(&seq);
+    // From here on every line on stderr is one JSON object, errors included.
+    crate::console::set_json(args.progress == ProgressFormat::Json);
+    let spec = JobSpec::new(&args.job)?;
+    let sixteen_bit = spec.sixteen_bit;
+    let warnings = super::warnings(&spec.seq);
     // With --pipe the stream is the product; files come too only when asked for explicitly.
-    let files = match args.pipe.is_none() || args.job.output.is_some() {
-        true => Some(file_sink(&seq, &args.job)?),
+    let files = match args.pipe.is_none() || spec.output_given {
+        true => Some(spec.files(&args.job)?),
         false => None,
     };
+    let JobSpec { seq, frames, .. } = spec;
     if args.claim && (files.is_none() || args.pipe.is_some()) {
         return Err(Error::Usage(
             "--claim shares frame files between processes; it cannot be combined with --pipe"
@@ -95,17 +44,19 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         ));
     }
     if args.dry_run {
-        warnings.iter().for_each(|w| eprintln!("warning: {w}"));
+        warnings
+            .iter()
+            .for_each(|w| crate::console::warning(&format!("warning: {w}")));
         let plan = files
             .as_ref()
             .map(|f| plan::plan(&seq, &frames, f, args.force));
-        return print_dry_run(&seq, plan.as_ref(), &frames);
+        return print_dry_run(&seq, plan.as_ref(), &frames, args.pipe.is_some());
     }
     let (pool, threads) = workers(args.threads)?;
     if let Some(files) = &files {
         prepare(files, &frames)?;
     }
-    let stream = args.pipe.map(|p| (p, args.job.bit_depth == "16"));
+    let stream = args.pipe.map(|p| (p, sixteen_bit));
     let plan = files
         .as_ref()
         .map(|f| plan::plan(&seq, &frames, f, args.force));
@@ -119,13 +70,11 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     for w in &warnings {
         progress.warn(&format!("warning: {w}"));
     }
+    progress.start(plan.as_ref(), frames.len());
     if let (Some(plan), Some(files)) = (&plan, &files) {
-        progress.note(&plan.summary());
         report_skipped(&progress, plan, files);
     }
-    if let Some((format, sixteen)) = stream {
-        stream_notes(&progress, &seq, format, sixteen, args.print_ffmpeg);
-    }
+    video_notes(&progress, &seq, stream, files.as_ref(), args.print_ffmpeg);
     let claims = args
         .claim
         .then(|| Arc::new(Claims::new(Duration::from_secs(args.claim_timeout))));
@@ -151,7 +100,7 @@ fn workers(asked: Option<u16>) -> Result<(rayon::ThreadPool, usize), Error> {
         Some(_) => Error::Usage(format!(
             "--threads {threads}: {e}; this machine has {cores} cores, and more threads than cores do not render faster"
         )),
-        None => Error::Failed(e),
+        None => Error::Run(e),
     })?;
     Ok((pool, threads))
 }
@@ -162,7 +111,7 @@ fn run_job(
     job: Job,
     frames: &FrameSet,
     progress: &mut Progress,
-) -> Result<Result<Outcome, String>, Error> {
+) -> Result<Result<Outcome, RunError>, Error> {
     let mut written = FrameSet::new();
     job.tasks
         .iter()
@@ -174,7 +123,7 @@ fn run_job(
         true => cooperate(pool, job, frames, progress),
         false => schedule::run_on(pool, job, progress),
     };
-    progress.finish();
+    progress.finish(matches!(outcome, Ok(Outcome::Interrupted { .. })));
     if let (Ok(Outcome::Complete { .. }), Some(files)) = (&outcome, &files) {
         verify(&seq, &written, files)?;
     }
@@ -236,7 +185,7 @@ fn cooperate(
     mut job: Job,
     frames: &FrameSet,
     progress: &mut Progress,
-) -> Result<Outcome, String> {
+) -> Result<Outcome, RunError> {
     let mut written = 0;
     let mut told: Option<Instant> = None;
     loop {
@@ -300,7 +249,14 @@ fn report_waiting(progress: &Progress, files: &Files, held: &[u64]) {
     progress.waiting(&set.to_string(), held.len(), &claims);
 }
 
-fn print_dry_run(seq: &Sequence, plan: Option<&Plan>, frames: &FrameSet) -> Result<(), Error> {
+/// The plan on stdout, or on stderr when stdout is the stream (`--pipe`): what reads the
+/// stream must never get text.
+fn print_dry_run(
+    seq: &Sequence,
+    plan: Option<&Plan>,
+    frames: &FrameSet,
+    piping: bool,
+) -> Result<(), Error> {
     let (text, rendering) = match plan {
         Some(plan) => {
             let render = plan.to_render();
@@ -311,9 +267,14 @@ fn print_dry_run(seq: &Sequence, plan: Option<&Plan>, frames: &FrameSet) -> Resu
     };
     let (cost, warning) = super::cost(seq, rendering);
     if let Some(w) = warning {
-        eprintln!("{w}");
+        crate::console::warning(&w);
     }
-    out(&format!("{text}cost: {cost}\n"))
+    let text = format!("{text}cost: {cost}\n");
+    if !piping {
+        return out(&text);
+    }
+    text.lines().for_each(crate::console::note);
+    Ok(())
 }
 
 /// Every selected frame when streaming (files written only where the plan says), otherwise
@@ -349,23 +310,45 @@ fn report_skipped(progress: &Progress, plan: &Plan, files: &Files) {
     }
 }
 
-fn stream_notes(
+/// The ffmpeg command for the stream, or else for the files (`--print-ffmpeg`), and the
+/// warning that yuv420p video needs even sizes.
+fn video_notes(
     progress: &Progress,
     seq: &Sequence,
-    format: StreamFormat,
-    sixteen: bool,
+    stream: Option<(StreamFormat, bool)>,
+    files: Option<&Files>,
     print: bool,
 ) {
+    use output::stream::{PAD, Source, ffmpeg_command};
     let (w, h) = (seq.settings.width, seq.settings.height);
-    let depth = (sixteen, seq.settings.alpha);
-    let command = output::stream::ffmpeg_command(format, depth, w, h, seq.timeline.fps);
+    let pattern = files.map(|f| f.pattern.ffmpeg());
+    let source = match (stream, &pattern) {
+        (Some((format, sixteen_bit)), _) => Some(Source::Stream {
+            format,
+            sixteen_bit,
+            alpha: seq.settings.alpha,
+        }),
+        (None, Some(pattern)) => Some(Source::Files {
+            pattern,
+            first: seq.timeline.first_frame(),
+        }),
+        (None, None) => None,
+    };
+    let Some(source) = source else { return };
     if print {
-        eprintln!("{command}");
+        let out = format!("{}.mp4", seq.name);
+        let fps = seq.timeline.fps_text();
+        progress.command(&ffmpeg_command(source, w, h, &fps, &out));
     }
     if w % 2 == 1 || h % 2 == 1 {
-        progress.warn(&format!(
-            "note: {w}x{h} is odd, and yuv420p video needs even sizes: give ffmpeg -vf pad=ceil(iw/2)*2:ceil(ih/2)*2"
-        ));
+        let text = format!(
+            "note: {w}x{h} is odd, and yuv420p video needs even sizes: give ffmpeg -vf '{PAD}'"
+        );
+        // A stream goes to ffmpeg now, so even --quiet says it; files may never become video.
+        match stream {
+            Some(_) => progress.warn(&text),
+            None => progress.note(&text),
+        }
     }
 }
 
@@ -389,36 +372,68 @@ fn interrupted_summary(
 }
 
 fn finish(
-    outcome: Result<Outcome, String>,
+    outcome: Result<Outcome, RunError>,
     plan: Option<&Plan>,
     streaming: bool,
 ) -> Result<(), Error> {
-    match outcome.map_err(Error::Failed)? {
+    match outcome? {
         Outcome::Complete { .. } => {
             let blocked = plan.map(Plan::blocked).unwrap_or_default();
             if blocked.is_empty() {
                 return Ok(());
             }
             Err(Error::Failed(format!(
-                "frames {blocked} were not written: files rayreel did not write are in the way (use --force to overwrite them)"
+                "{} not written: files rayreel did not write are in the way (use --force to overwrite them)",
+                match blocked.len() {
+                    1 => format!("frame {blocked} was"),
+                    _ => format!("frames {blocked} were"),
+                }
             )))
         }
         Outcome::Interrupted { written, streamed } => Err(Error::Interrupted(
             interrupted_summary(written, streamed, plan, streaming),
             schedule::interrupt_code(),
         )),
+        // Ctrl-C in `rayreel … | ffmpeg …` reaches both: ffmpeg closing the pipe is then
+        // the interruption, not a reader that had enough.
+        Outcome::ReaderClosed { streamed } if reader_was_interrupted() => Err(Error::Interrupted(
+            interrupted_summary(0, streamed, None, true),
+            schedule::interrupt_code(),
+        )),
         Outcome::ReaderClosed { streamed } => {
-            eprintln!("rayreel: the reader closed the stream after {streamed} frames; stopping");
+            crate::console::note(&format!(
+                "rayreel: the reader closed the stream after {}; stopping",
+                plural(streamed as u64, "frame")
+            ));
             Ok(())
         }
     }
 }
 
+/// Whether a signal came with the reader's end: the terminal sends Ctrl-C to every process
+/// of the pipeline, and the reader may exit a moment before the signal is noticed here.
+fn reader_was_interrupted() -> bool {
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_millis(200) {
+        if schedule::interrupted() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    schedule::interrupted()
+}
+
+/// `1 frame`, `3 frames`.
+pub(crate) fn plural(n: u64, noun: &str) -> String {
+    format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
+}
+
 /// `rayreel status`: the completeness of the output against the sequence; exit 0 only when
 /// every selected frame is up to date.
-pub fn status(args: StatusArgs) -> Result<(), Error> {
-    let (seq, frames) = load(&args.job)?;
-    let files = file_sink(&seq, &args.job)?;
+pub fn status(args: RenderArgs) -> Result<(), Error> {
+    let spec = JobSpec::for_status(&args.job)?;
+    let files = spec.files(&args.job)?;
+    let (seq, frames) = (spec.seq, spec.frames);
     let plan = plan::plan(&seq, &frames, &files, false);
     let dir = plan::directory(&files.pattern.frame_path(0));
     let mut lines = vec![format!("{}: {}", shown(&dir), plan.status_line())];

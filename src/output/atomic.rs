@@ -39,15 +39,7 @@ pub fn hostname() -> &'static str {
 }
 
 fn read_hostname() -> String {
-    let mut buf = [0u8; 256];
-    // SAFETY: the buffer is valid for its length; gethostname NUL-terminates within it or fails.
-    let ok = unsafe { libc::gethostname(buf.as_mut_ptr().cast(), buf.len()) } == 0;
-    let name = if ok {
-        let end = buf.iter().position(|&b| b == 0).unwrap_or(buf.len());
-        String::from_utf8_lossy(&buf[..end]).into_owned()
-    } else {
-        String::new()
-    };
+    let name = gethostname::gethostname().to_string_lossy().into_owned();
     let clean: String = name
         .chars()
         .filter(|c| c.is_ascii_alphanumeric() || *c == '.')
@@ -89,13 +81,11 @@ pub fn temp_path(path: &Path) -> PathBuf {
     sidecar(path, &suffix, TEMP_EXTRA)
 }
 
-/// 64 unpredictable bits from the kernel (a hash of time, pid and a counter if it fails).
+/// 64 unpredictable bits: std's hash keys come from the operating system's random source,
+/// mixed here with time, pid and a counter.
 fn random() -> u64 {
-    let mut buf = [0u8; 8];
-    // SAFETY: the buffer is valid for its 8 bytes.
-    if unsafe { libc::getrandom(buf.as_mut_ptr().cast(), buf.len(), 0) } == 8 {
-        return u64::from_ne_bytes(buf);
-    }
+    use std::hash::{BuildHasher, Hasher as _};
+    let mut keyed = std::collections::hash_map::RandomState::new().build_hasher();
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let now = SystemTime::now()
         .duration_since(SystemTime::UNIX_EPOCH)
@@ -105,8 +95,8 @@ fn random() -> u64 {
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
     );
-    let hex = Hasher::new().write(seed.as_bytes()).hex();
-    u64::from_str_radix(&hex[..16], 16).unwrap_or_default()
+    keyed.write(seed.as_bytes());
+    keyed.finish()
 }
 
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
@@ -231,11 +221,18 @@ fn stale_temporaries(dir: &Path) -> Vec<(String, PathBuf)> {
 }
 
 /// Whether a process with this pid exists on this host.
+#[cfg(unix)]
 pub fn alive(pid: i32) -> bool {
     // SAFETY: signal 0 only checks that the process exists.
     pid > 0
         && (unsafe { libc::kill(pid, 0) } == 0
             || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM))
+}
+
+/// Elsewhere a claim's owner counts as alive: its claim ends by its heartbeat's silence.
+#[cfg(not(unix))]
+pub fn alive(pid: i32) -> bool {
+    pid > 0
 }
 
 #[cfg(test)]

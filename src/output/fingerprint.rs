@@ -4,10 +4,15 @@
 //! attribute), so a frame describes itself wherever it is copied, and shards on a shared
 //! directory need no common manifest.
 
+use crate::camera::{Camera, Pose};
+use crate::exposure::{Exposure, Shutter};
 use crate::output::FileFormat;
-use crate::scene::Scene;
-use crate::tracer::Settings;
+use crate::output::exr::Precision;
+use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
+use crate::timeline::Timeline;
+use crate::tracer::{Adaptive, Sampler, Settings};
 use crate::transfer::Encoding;
+use glam::DVec3;
 
 /// Key of the PNG text chunk and the EXR attribute that hold the fingerprint.
 pub const KEY: &str = "rayreel:fingerprint";
@@ -40,8 +45,12 @@ impl Default for Hasher {
     }
 }
 
-/// The part shared by every frame of a run: version, scene, settings and format. `Debug`
-/// prints every f64 in its shortest round-trip form, which makes it a canonical text.
+/// Names the encoding below; a change to it (a field added, an order changed) must change
+/// this name, so frames made under the old one count as stale rather than as the same job.
+pub const ENCODING: &str = "rayreel fingerprint v2";
+
+/// The part shared by every frame of a run: the renderer's version, then the scene, the
+/// render settings and the file content in the canonical encoding of `Canon`.
 pub fn of_run(scene: &Scene, settings: &Settings, format: &FileFormat) -> Hasher {
     // EXR frames are linear whatever the encoding, which must not make them stale.
     let settings = match format {
@@ -53,15 +62,343 @@ pub fn of_run(scene: &Scene, settings: &Settings, format: &FileFormat) -> Hasher
     };
     let mut h = Hasher::new();
     h.write(concat!("rayreel ", env!("CARGO_PKG_VERSION"), "\n").as_bytes());
-    h.write(format!("{scene:?}\n{settings:?}\n{:?}\n", format.content()).as_bytes());
+    h.write(ENCODING.as_bytes());
+    scene.canon(&mut h);
+    settings.canon(&mut h);
+    format.canon(&mut h);
     h
 }
 
-/// The fingerprint of one frame: the run's hash extended with the frame's camera, as text
-/// (`exposure::describe`: the pose's `Debug` form, and the lens and the cameras of the open
-/// interval when they matter).
-pub fn of_frame(run: &Hasher, camera: &str) -> String {
+/// The fingerprint of one frame: the run's hash extended with the frame's number (its
+/// samples are seeded from it), its camera at the frame time, and what its exposure adds: the
+/// lens when open, and the camera at every instant of the shutter's open interval when the
+/// camera moves while it is open (a still camera gives the same image with a shutter or
+/// without, and the same fingerprint).
+pub fn of_frame(run: &Hasher, n: u64, timeline: &Timeline, shutter: Option<Shutter>) -> String {
     let mut h = *run;
-    h.write(camera.as_bytes());
+    n.canon(&mut h);
+    timeline.pose_of(n).canon(&mut h);
+    match Exposure::of_frame(timeline, shutter, n) {
+        Ok(e) => {
+            let lens = (e.camera.lens_radius > 0.0)
+                .then_some([e.camera.lens_radius, e.camera.focus_distance]);
+            tagged(&mut h, 0, &[&lens, &e.instants]);
+        }
+        // Never rendered: the run stops on it.
+        Err(_) => tagged(&mut h, 1, &[]),
+    }
     h.hex()
+}
+
+/// The canonical encoding: every value as fixed-size little-endian bytes (an f64 as its
+/// IEEE-754 bits, so nothing depends on how numbers print), a list as its length then its
+/// items, an enum as a tag byte then its fields, a struct as its fields in declaration
+/// order. Structs are destructured whole, so a field added without being encoded here does
+/// not compile.
+pub trait Canon {
+    fn canon(&self, h: &mut Hasher);
+}
+
+impl Canon for f64 {
+    fn canon(&self, h: &mut Hasher) {
+        h.write(&self.to_bits().to_le_bytes());
+    }
+}
+
+impl Canon for f32 {
+    fn canon(&self, h: &mut Hasher) {
+        h.write(&self.to_bits().to_le_bytes());
+    }
+}
+
+impl Canon for u64 {
+    fn canon(&self, h: &mut Hasher) {
+        h.write(&self.to_le_bytes());
+    }
+}
+
+impl Canon for u32 {
+    fn canon(&self, h: &mut Hasher) {
+        h.write(&self.to_le_bytes());
+    }
+}
+
+impl Canon for usize {
+    fn canon(&self, h: &mut Hasher) {
+        (*self as u64).canon(h);
+    }
+}
+
+impl Canon for bool {
+    fn canon(&self, h: &mut Hasher) {
+        h.write(&[u8::from(*self)]);
+    }
+}
+
+impl Canon for DVec3 {
+    fn canon(&self, h: &mut Hasher) {
+        [self.x, self.y, self.z].iter().for_each(|v| v.canon(h));
+    }
+}
+
+impl<T: Canon> Canon for [T] {
+    fn canon(&self, h: &mut Hasher) {
+        self.len().canon(h);
+        self.iter().for_each(|v| v.canon(h));
+    }
+}
+
+impl<T: Canon> Canon for Vec<T> {
+    fn canon(&self, h: &mut Hasher) {
+        self[..].canon(h);
+    }
+}
+
+impl<T: Canon, const N: usize> Canon for [T; N] {
+    fn canon(&self, h: &mut Hasher) {
+        self.iter().for_each(|v| v.canon(h));
+    }
+}
+
+impl<T: Canon> Canon for Option<T> {
+    fn canon(&self, h: &mut Hasher) {
+        match self {
+            None => {
+                h.write(&[0]);
+            }
+            Some(v) => {
+                h.write(&[1]);
+                v.canon(h);
+            }
+        }
+    }
+}
+
+/// `canon_struct!(Type { a, b })`: encodes a `Type` field by field, in the order given (the
+/// declaration order). The value is destructured whole, so a field added to `Type` and not
+/// listed here does not compile.
+macro_rules! canon_struct {
+    ($ty:ident { $($field:ident),* $(,)? }) => {
+        impl Canon for $ty {
+            fn canon(&self, h: &mut Hasher) {
+                let $ty { $($field),* } = self;
+                $($field.canon(h);)*
+            }
+        }
+    };
+}
+
+/// A tag byte, then the fields.
+fn tagged(h: &mut Hasher, tag: u8, fields: &[&dyn Canon]) {
+    h.write(&[tag]);
+    fields.iter().for_each(|f| f.canon(h));
+}
+
+canon_struct!(Scene {
+    objects,
+    materials,
+    lights,
+    background,
+});
+
+impl Canon for Object {
+    fn canon(&self, h: &mut Hasher) {
+        let Object { shape, material } = self;
+        match shape {
+            Shape::Sphere { center, radius } => tagged(h, 0, &[center, radius]),
+            Shape::Plane { point, normal } => tagged(h, 1, &[point, normal]),
+        }
+        material.canon(h);
+    }
+}
+
+canon_struct!(Material {
+    ambient,
+    diffuse,
+    specular,
+    exponent,
+    specular_floor,
+    reflection,
+    transmission,
+    ior,
+    fresnel,
+});
+
+canon_struct!(Intensity {
+    ambient,
+    diffuse,
+    specular,
+});
+
+impl Canon for Light {
+    fn canon(&self, h: &mut Hasher) {
+        match self {
+            Light::Point {
+                position,
+                intensity,
+            } => tagged(h, 0, &[position, intensity]),
+            Light::Directional {
+                to_light,
+                intensity,
+            } => tagged(h, 1, &[to_light, intensity]),
+            Light::Spot {
+                position,
+                axis,
+                cos_inner,
+                cos_outer,
+                intensity,
+            } => tagged(h, 2, &[position, axis, cos_inner, cos_outer, intensity]),
+            Light::Ambient { color } => tagged(h, 3, &[color]),
+        }
+    }
+}
+
+impl Canon for Settings {
+    fn canon(&self, h: &mut Hasher) {
+        let Settings {
+            width,
+            height,
+            max_depth,
+            depth,
+            samples,
+            adaptive,
+            sampler,
+            // Enters through each frame's cameras (`of_frame`), so a frame whose camera holds
+            // still while the shutter is open keeps its fingerprint.
+            shutter: _,
+            alpha,
+            exposure,
+            encoding,
+        } = self;
+        let fields: [&dyn Canon; 6] = [width, height, max_depth, depth, samples, adaptive];
+        fields.iter().for_each(|f| f.canon(h));
+        let tag = match sampler {
+            Sampler::Stratified => 0,
+            Sampler::Random => 1,
+        };
+        h.write(&[tag]);
+        let fields: [&dyn Canon; 2] = [alpha, exposure];
+        fields.iter().for_each(|f| f.canon(h));
+        h.write(&[match encoding {
+            Encoding::Srgb => 0,
+            Encoding::Linear => 1,
+        }]);
+    }
+}
+
+canon_struct!(Adaptive {
+    threshold,
+    max_samples,
+});
+
+/// What decides the decoded content; PNG compression only changes how it is packed.
+impl Canon for FileFormat {
+    fn canon(&self, h: &mut Hasher) {
+        match self {
+            FileFormat::Png { sixteen_bit, .. } => tagged(h, 0, &[sixteen_bit]),
+            FileFormat::Exr { precision } => {
+                let float = *precision == Precision::Float;
+                tagged(h, 1, &[&float])
+            }
+        }
+    }
+}
+
+canon_struct!(Pose {
+    position,
+    look_at,
+    up,
+    fov,
+});
+
+canon_struct!(Camera {
+    origin,
+    forward,
+    right,
+    up,
+    tan_half_fov,
+    lens_radius,
+    focus_distance,
+});
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A still camera at (x, 0, 1) looking at the origin, with a lens of `aperture`.
+    fn still(x: f64, aperture: f64) -> Timeline {
+        let pose = Pose {
+            position: DVec3::new(x, 0.0, 1.0),
+            look_at: DVec3::ZERO,
+            up: DVec3::Y,
+            fov: 90.0,
+        };
+        Timeline::still(crate::timeline::Key {
+            time: 0.0,
+            pose,
+            ease: crate::timeline::Ease::Pass,
+            aperture,
+            focus_distance: None,
+        })
+    }
+
+    #[test]
+    fn the_encoding_is_what_the_readme_says() {
+        let settings = Settings {
+            width: 2,
+            height: 1,
+            max_depth: 3,
+            depth: false,
+            samples: 1,
+            adaptive: None,
+            sampler: Sampler::Stratified,
+            shutter: None,
+            alpha: false,
+            exposure: 0.0,
+            encoding: Encoding::Srgb,
+        };
+        let scene = Scene {
+            objects: Vec::new(),
+            materials: Vec::new(),
+            lights: Vec::new(),
+            background: DVec3::ZERO,
+        };
+        let png = FileFormat::Png {
+            sixteen_bit: false,
+            compression: crate::output::png::Compression::Fast,
+        };
+        let run = of_run(&scene, &settings, &png);
+        let mut bytes = Vec::new();
+        bytes.extend(concat!("rayreel ", env!("CARGO_PKG_VERSION"), "\n").as_bytes());
+        bytes.extend(ENCODING.as_bytes());
+        bytes.extend([0u8; 24]); // three empty lists
+        bytes.extend([0u8; 24]); // background (0, 0, 0)
+        for v in [2u32, 1, 3] {
+            bytes.extend(v.to_le_bytes());
+        }
+        bytes.push(0); // depth
+        bytes.extend(1u32.to_le_bytes());
+        bytes.extend([0, 0]); // no adaptive, stratified
+        bytes.push(0); // no alpha
+        bytes.extend(0f64.to_bits().to_le_bytes()); // exposure
+        bytes.push(0); // srgb
+        bytes.extend([0, 0]); // png, 8 bits
+        assert_eq!(run.hex(), Hasher::new().write(&bytes).hex());
+        // The frame's number, camera and lens each change it; a shutter on a still camera
+        // and the compression do not.
+        let at = |x, aperture, n, shutter| of_frame(&run, n, &still(x, aperture), shutter);
+        let open = Some(Shutter {
+            angle: 180.0,
+            offset: 0.0,
+        });
+        assert_ne!(at(0.0, 0.0, 0, None), at(0.0, 0.0, 1, None));
+        assert_ne!(at(0.0, 0.0, 0, None), at(-0.0, 0.0, 0, None));
+        assert_ne!(at(0.0, 0.0, 0, None), at(0.0, 0.1, 0, None));
+        assert_eq!(at(0.0, 0.0, 0, None), at(0.0, 0.0, 0, open));
+        let best = FileFormat::Png {
+            sixteen_bit: false,
+            compression: crate::output::png::Compression::Best,
+        };
+        assert_eq!(run.hex(), of_run(&scene, &settings, &best).hex());
+    }
 }

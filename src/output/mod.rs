@@ -54,16 +54,6 @@ impl FileFormat {
         };
         if alpha { (depth, 6, 4) } else { (depth, 2, 3) }
     }
-
-    /// What decides the decoded content (compression only changes how it is packed).
-    pub fn content(&self) -> String {
-        match self {
-            FileFormat::Png { sixteen_bit, .. } => {
-                format!("png{}", if *sixteen_bit { 16 } else { 8 })
-            }
-            FileFormat::Exr { precision } => format!("exr-{precision:?}"),
-        }
-    }
 }
 
 /// What a frame file records about itself.

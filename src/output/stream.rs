@@ -25,7 +25,68 @@ pub fn encode(frame: &Frame, format: StreamFormat, sixteen_bit: bool) -> Result<
     }
 }
 
-/// The ffmpeg command that reads this stream and makes an H.264 video.
+/// What ffmpeg reads: this stream on its stdin, or the frame files.
+#[derive(Debug, Clone, Copy)]
+pub enum Source<'a> {
+    Stream {
+        format: StreamFormat,
+        sixteen_bit: bool,
+        /// RGBA frames: ProRes 4444 keeps their alpha, which H.264 cannot carry.
+        alpha: bool,
+    },
+    /// ffmpeg's image2 pattern (`frames/orbit/frame_%04d.png`) and the first frame number.
+    Files { pattern: &'a str, first: u64 },
+}
+
+/// The ffmpeg command that reads `source` (frames of `width`×`height` at `fps`, written as
+/// ffmpeg's `-r` takes it: `24`, `24000/1001`) and makes an H.264 video in yuv420p, which
+/// every player takes. Odd sizes get a pad filter, since yuv420p needs even ones. Every
+/// word is quoted for a POSIX shell where it needs it, so the line can be pasted as it is.
+pub fn ffmpeg_command(source: Source, width: u32, height: u32, fps: &str, out: &str) -> String {
+    let mut words: Vec<String> = vec!["ffmpeg".into()];
+    let mut add = |list: &[&str]| words.extend(list.iter().map(|w| w.to_string()));
+    match source {
+        Source::Stream {
+            format: StreamFormat::Raw,
+            sixteen_bit,
+            alpha,
+        } => {
+            add(&["-f", "rawvideo", "-pix_fmt", pix_fmt(sixteen_bit, alpha)]);
+            add(&["-s", &format!("{width}x{height}"), "-r", fps, "-i", "-"]);
+        }
+        Source::Stream {
+            format: StreamFormat::Png,
+            ..
+        } => add(&["-f", "image2pipe", "-framerate", fps, "-i", "-"]),
+        Source::Files { pattern, first } => {
+            add(&["-framerate", fps]);
+            if first != 0 {
+                add(&["-start_number", &first.to_string()]);
+            }
+            add(&["-i", pattern]);
+        }
+    }
+    if let Source::Stream { alpha: true, .. } = source {
+        let mov = format!("{}.mov", out.strip_suffix(".mp4").unwrap_or(out));
+        add(&[
+            "-c:v",
+            "prores_ks",
+            "-profile:v",
+            "4444",
+            "-pix_fmt",
+            "yuva444p10le",
+            &mov,
+        ]);
+    } else {
+        if width % 2 == 1 || height % 2 == 1 {
+            add(&["-vf", PAD]);
+        }
+        add(&["-c:v", "libx264", "-pix_fmt", "yuv420p", out]);
+    }
+    let quoted: Vec<String> = words.iter().map(|w| shell_quote(w)).collect();
+    quoted.join(" ")
+}
+
 /// The stream's pixels as ffmpeg names them.
 pub fn pix_fmt(sixteen_bit: bool, alpha: bool) -> &'static str {
     match (sixteen_bit, alpha) {
@@ -36,31 +97,41 @@ pub fn pix_fmt(sixteen_bit: bool, alpha: bool) -> &'static str {
     }
 }
 
-/// The ffmpeg command that reads this stream: H.264 for colour, or (with alpha, which
-/// H.264 cannot carry) ProRes 4444 with its alpha channel.
-pub fn ffmpeg_command(
-    format: StreamFormat,
-    (sixteen_bit, alpha): (bool, bool),
-    width: u32,
-    height: u32,
-    fps: f64,
-) -> String {
-    let input = match format {
-        StreamFormat::Raw => format!(
-            "-f rawvideo -pix_fmt {} -s {width}x{height} -r {fps}",
-            pix_fmt(sixteen_bit, alpha)
-        ),
-        StreamFormat::Png => format!("-f image2pipe -framerate {fps}"),
-    };
-    let pad = if width % 2 == 1 || height % 2 == 1 {
-        " -vf pad=ceil(iw/2)*2:ceil(ih/2)*2"
-    } else {
-        ""
-    };
-    match alpha {
-        true => format!(
-            "ffmpeg {input} -i - -c:v prores_ks -profile:v 4444 -pix_fmt yuva444p10le out.mov"
-        ),
-        false => format!("ffmpeg {input} -i -{pad} -c:v libx264 -pix_fmt yuv420p out.mp4"),
+/// The filter that pads an odd size to the next even one.
+pub const PAD: &str = "pad=ceil(iw/2)*2:ceil(ih/2)*2";
+
+/// `w` as one word of a POSIX shell: as it is when it holds only characters no shell treats
+/// specially, otherwise in single quotes (a quote inside becomes `'\''`).
+pub fn shell_quote(w: &str) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "-_./:=,+%@".contains(c);
+    match !w.is_empty() && w.chars().all(plain) {
+        true => w.to_string(),
+        false => format!("'{}'", w.replace('\'', r"'\''")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn commands_paste_into_a_shell() {
+        let raw = Source::Stream {
+            format: StreamFormat::Raw,
+            sixteen_bit: false,
+            alpha: false,
+        };
+        assert_eq!(
+            ffmpeg_command(raw, 641, 361, "24", "out.mp4"),
+            "ffmpeg -f rawvideo -pix_fmt rgb24 -s 641x361 -r 24 -i - -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' -c:v libx264 -pix_fmt yuv420p out.mp4"
+        );
+        let files = Source::Files {
+            pattern: "my frames/f_%04d.png",
+            first: 1001,
+        };
+        assert_eq!(
+            ffmpeg_command(files, 640, 360, "24000/1001", "it's.mp4"),
+            "ffmpeg -framerate 24000/1001 -start_number 1001 -i 'my frames/f_%04d.png' -c:v libx264 -pix_fmt yuv420p 'it'\\''s.mp4'"
+        );
     }
 }

@@ -256,7 +256,8 @@ pub struct AmbientLight {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Timeline {
-    pub fps: Option<f64>,
+    pub fps: Option<Fps>,
+    pub first_frame: Option<u64>,
     pub duration: Option<f64>,
     pub interpolation: Option<Interpolation>,
     pub speed: Option<Speed>,
@@ -307,4 +308,42 @@ pub struct Orbit {
     pub look_at: Option<V3>,
     pub up: Option<V3>,
     pub fov: Option<f64>,
+}
+
+/// `fps: 24`, `fps: 29.97` or `fps: 24000/1001` (a fraction, as ffmpeg's `-r` takes it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Fps {
+    Number(f64),
+    Fraction(u64, u64),
+}
+
+impl<'de> Deserialize<'de> for Fps {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = Fps;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number of frames per second or a fraction such as 24000/1001")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Fps, E> {
+                Ok(Fps::Number(v))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Fps, E> {
+                Ok(Fps::Number(v as f64))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Fps, E> {
+                Ok(Fps::Number(v as f64))
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<Fps, E> {
+                let whole = |t: &str| t.trim().parse::<u64>().ok().filter(|&n| n > 0);
+                match s.split_once('/').map(|(n, d)| (whole(n), whole(d))) {
+                    Some((Some(num), Some(den))) => Ok(Fps::Fraction(num, den)),
+                    _ => Err(E::custom(format!(
+                        "expected frames per second as a number or a fraction of whole numbers such as 24000/1001 (got `{s}`)"
+                    ))),
+                }
+            }
+        }
+        d.deserialize_any(V)
+    }
 }

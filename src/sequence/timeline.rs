@@ -8,8 +8,11 @@ use super::{
 use crate::camera::{Camera, Degenerate, Pose};
 use crate::exposure::{INSTANTS, Shutter};
 use crate::timeline::{
-    Ease, Interpolation, Key, Keyed, Orbit, Path as TimelinePath, Speed, Timeline, frames_to,
+    Clock, Ease, Interpolation, Key, Keyed, Orbit, Path as TimelinePath, Speed, Timeline, frames_to,
 };
+
+/// Largest `timeline.first_frame`: frame numbers stay below 2^53, exact in f64.
+pub const MAX_FIRST_FRAME: u64 = 1 << 50;
 use glam::DVec3;
 
 /// A timeline that loaded, with what is worth a warning and, separately, the first problem
@@ -25,24 +28,39 @@ pub(super) fn timeline(
     camera: Option<Key>,
     shutter: Option<Shutter>,
 ) -> Check<Loaded> {
-    let fps = in_range(
-        "timeline.fps",
-        t.fps.unwrap_or(24.0),
-        0.0,
-        MAX_FPS,
-        "in (0, 1000]",
-    )?;
+    let (fps, fraction) = match t.fps.unwrap_or(raw::Fps::Number(24.0)) {
+        raw::Fps::Number(fps) => (fps, None),
+        raw::Fps::Fraction(num, den) => (num as f64 / den as f64, Some((num, den))),
+    };
+    in_range("timeline.fps", fps, 0.0, MAX_FPS, "in (0, 1000]")?;
     if fps == 0.0 {
         return invalid(
             "timeline.fps",
             format!("must be greater than 0 {}", got_num(fps)),
         );
     }
+    let first_frame = t.first_frame.unwrap_or(0);
+    if first_frame > MAX_FIRST_FRAME {
+        return invalid(
+            "timeline.first_frame",
+            format!("must be at most {MAX_FIRST_FRAME} {}", got(first_frame)),
+        );
+    }
     let path = path(t, camera)?;
+    let duration = match (&path, t.duration) {
+        (_, Some(d)) => Some(d),
+        (TimelinePath::Orbit(o), None) => Some(o.duration),
+        (TimelinePath::Keys(k), None) => k.keys.last().map(|k| k.time),
+    };
     let timeline = Timeline {
         fps,
         frame_count: frame_count(t, &path, fps)?,
         path,
+        clock: Clock {
+            first_frame,
+            fraction,
+            duration,
+        },
     };
     let warnings = t
         .duration
@@ -162,7 +180,7 @@ fn unseen_keys(t: &Timeline, duration: f64) -> Vec<String> {
     let TimelinePath::Keys(k) = &t.path else {
         return Vec::new();
     };
-    let last_frame = t.frame_count - 1;
+    let last_frame = t.last_frame();
     let end = t.time_of(last_frame);
     let late: Vec<usize> = (0..k.keys.len())
         .filter(|&i| k.passes[i] > end + 1e-6 / t.fps)
@@ -171,15 +189,17 @@ fn unseen_keys(t: &Timeline, duration: f64) -> Vec<String> {
         return Vec::new();
     }
     let names: Vec<String> = late.iter().map(|i| i.to_string()).collect();
-    let times: Vec<String> = late.iter().map(|&i| k.passes[i].to_string()).collect();
+    let times: Vec<String> = late.iter().map(|&i| num(k.passes[i])).collect();
     let (noun, verb) = if late.len() == 1 {
         ("keyframe", "is")
     } else {
         ("keyframes", "are")
     };
     vec![format!(
-        "timeline.duration: {duration} s at {} fps ends with frame {last_frame} (t = {end} s), so {noun} {} (t = {} s) {verb} never shown; remove `duration` to end on the last keyframe",
-        t.fps,
+        "timeline.duration: {} s at {} fps ends with frame {last_frame} (t = {} s), so {noun} {} (t = {} s) {verb} never shown; remove `duration` to end on the last keyframe",
+        num(duration),
+        t.fps_text(),
+        num(end),
         names.join(", "),
         times.join(", ")
     )]
@@ -337,7 +357,7 @@ fn check_every_frame(t: &Timeline, shutter: Option<Shutter>) -> Check<()> {
     const FULL_CHECK: u64 = 1_000_000;
     let step = t.frame_count.div_ceil(FULL_CHECK).max(1);
     let mut previous_right: Option<DVec3> = None;
-    for n in (0..t.frame_count).step_by(step as usize) {
+    for n in (t.first_frame()..=t.last_frame()).step_by(step as usize) {
         let frame_time = t.time_of(n);
         let times = match shutter {
             Some(s) => vec![
@@ -385,15 +405,22 @@ fn frame_problem(t: &Timeline, n: u64, time: f64, pose: &Pose, e: Degenerate) ->
     };
     let frame_time = t.time_of(n);
     let when = if time == frame_time {
-        format!("t = {time} s")
+        format!("t = {} s", num(time))
     } else {
-        format!("t = {frame_time} s, shutter open at t = {time} s")
+        format!(
+            "t = {} s, shutter open at t = {} s",
+            num(frame_time),
+            num(time)
+        )
     };
     invalid(
         path,
         format!(
             "frame {n} ({when}){between}: {e} (position {}, look_at {}, up {}, fov {})",
-            pose.position, pose.look_at, pose.up, pose.fov
+            super::num3(pose.position),
+            super::num3(pose.look_at),
+            super::num3(pose.up),
+            num(pose.fov)
         ),
     )
 }

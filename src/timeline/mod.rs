@@ -1,4 +1,5 @@
-//! Keyframes → `camera_at(t)`. Frame n shows t = n / fps, computed in f64 from the integer n.
+//! Keyframes → `camera_at(t)`. Frame n shows t = (n − first_frame) / fps, computed in f64 from
+//! the integer n (see `Clock`).
 //!
 //! ```yaml
 //! timeline:
@@ -103,9 +104,25 @@ pub enum Path {
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct Timeline {
+    /// Frames per second: `num / den` rounded to f64 when the file gives a fraction.
     pub fps: f64,
     pub frame_count: u64,
     pub path: Path,
+    /// Frame numbers and their times.
+    pub clock: Clock,
+}
+
+/// How frame numbers map to time: frames are numbered `first_frame` … `first_frame +
+/// frame_count − 1`, and frame n shows t = (n − first_frame) / fps, or exactly
+/// ((n − first_frame) · den) / num in f64 when fps is the fraction num/den (`24000/1001`).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Clock {
+    /// The number of the first frame (`timeline.first_frame`, `--first-frame`; default 0).
+    pub first_frame: u64,
+    /// `timeline.fps` as written when it is a fraction num/den.
+    pub fraction: Option<(u64, u64)>,
+    /// The length the file gives (`timeline.duration`, the orbit's, the last key's time).
+    pub duration: Option<f64>,
 }
 
 /// A key may end this much of a frame after the frame that shows it (rounding in t × fps).
@@ -219,12 +236,35 @@ impl Timeline {
                 Interpolation::Linear,
                 Speed::Keys,
             ))),
+            clock: Clock::default(),
         }
     }
 
-    /// The time frame `n` shows, exact for any n (no accumulation).
+    /// The time frame `n` shows, exact for any n (no accumulation): see `Clock`.
     pub fn time_of(&self, n: u64) -> f64 {
-        n as f64 / self.fps
+        let i = n.saturating_sub(self.clock.first_frame) as f64;
+        match self.clock.fraction {
+            Some((num, den)) => (i * den as f64) / num as f64,
+            None => i / self.fps,
+        }
+    }
+
+    /// The number of the first frame.
+    pub fn first_frame(&self) -> u64 {
+        self.clock.first_frame
+    }
+
+    /// The number of the last frame.
+    pub fn last_frame(&self) -> u64 {
+        self.clock.first_frame + (self.frame_count - 1)
+    }
+
+    /// `24` or `23.976`, or the fraction as written (`24000/1001`), as ffmpeg's `-r` takes it.
+    pub fn fps_text(&self) -> String {
+        match self.clock.fraction {
+            Some((num, den)) => format!("{num}/{den}"),
+            None => format!("{}", self.fps),
+        }
     }
 
     pub fn pose_of(&self, n: u64) -> Pose {

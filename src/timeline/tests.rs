@@ -28,6 +28,7 @@ fn keyed(keys: Vec<Key>, interpolation: Interpolation, speed: Speed) -> Timeline
         fps: 24.0,
         frame_count: 100,
         path: Path::Keys(Box::new(Keyed::new(keys, interpolation, speed))),
+        clock: Default::default(),
     }
 }
 
@@ -207,6 +208,7 @@ fn orbit_has_constant_radius_and_speed_and_loops() {
         fps: 24.0,
         frame_count: 144,
         path: Path::Orbit(o),
+        clock: Default::default(),
     };
     let step = tl.pose_of(1).position.distance(tl.pose_of(0).position);
     for n in 0..144 {
@@ -229,6 +231,22 @@ fn frame_time_is_exact_far_out() {
     };
     assert_eq!(tl.time_of(10_000_000), 10_000_000.0 / 60.0);
     assert_eq!(tl.time_of(600), 10.0);
+}
+
+#[test]
+fn first_frame_and_fractional_fps() {
+    let mut tl = Timeline {
+        fps: 24000.0 / 1001.0,
+        ..Timeline::still(key(0.0, 0.0, 90.0))
+    };
+    tl.clock.first_frame = 1001;
+    tl.clock.fraction = Some((24000, 1001));
+    assert_eq!(tl.time_of(1001), 0.0);
+    // (n − first)·den/num with one rounding: 24 frames at 23.976 fps take 1.001 s.
+    assert_eq!(tl.time_of(1025), 1.001);
+    assert_eq!(tl.time_of(1001 + 24000), 1001.0);
+    assert_eq!((tl.first_frame(), tl.last_frame()), (1001, 1001));
+    assert_eq!(tl.fps_text(), "24000/1001");
 }
 
 #[test]

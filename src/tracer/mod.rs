@@ -46,10 +46,8 @@ pub struct Settings {
     pub shutter: Option<Shutter>,
 }
 
-/// The derived form without `shutter`. The text is part of every frame's fingerprint; the
-/// shutter enters it through the frame's cameras instead (`exposure::describe`), so files
-/// rendered before the shutter existed keep their fingerprints, and a frame whose camera holds
-/// still while the shutter is open (the same image with or without it) stays up to date.
+/// The derived form without `shutter`, whose effect shows in each frame's cameras (see
+/// `exposure`); the fingerprint does not use this text (see `output::fingerprint::Canon`).
 impl std::fmt::Debug for Settings {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         f.debug_struct("Settings")

@@ -27,12 +27,35 @@ pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-/// A fresh, empty scratch directory unique to `name`.
-pub fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rayreel-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A fresh, empty scratch directory, removed when dropped (tempfile); it reads as the `Path`
+/// it is, so `tmp.join(…)` and `&tmp` work as with a `PathBuf`.
+pub struct Scratch(tempfile::TempDir);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+/// A fresh, empty scratch directory named after `name` (which shows in the path, to tell
+/// leftovers of a killed test apart); `RAYREEL_KEEP_SCRATCH=1` keeps it for a look.
+pub fn scratch(name: &str) -> Scratch {
+    let mut dir = tempfile::Builder::new()
+        .prefix(&format!("rayreel-test-{name}-"))
+        .tempdir()
+        .unwrap();
+    if std::env::var_os("RAYREEL_KEEP_SCRATCH").is_some() {
+        dir.disable_cleanup(true);
+        eprintln!("scratch: {}", dir.path().display());
+    }
+    Scratch(dir)
 }
 
 /// Every file below `dir`, relative, sorted.
@@ -122,7 +145,7 @@ pub fn orbit(fps: u32, duration: f64) -> String {
 
 /// A scratch directory holding `seq.yaml` and, under `clean/`, its single-process render: the
 /// reference the farm, fault and resume tests compare against.
-pub fn with_clean_render(name: &str, yaml: &str) -> PathBuf {
+pub fn with_clean_render(name: &str, yaml: &str) -> Scratch {
     let tmp = scratch(name);
     std::fs::write(tmp.join("seq.yaml"), yaml).unwrap();
     let out = run_in(

@@ -76,7 +76,12 @@ pub struct Row {
 /// Renders frame `n` with `settings` in place of the sequence's (building the geometry; the
 /// measurement itself builds it once for all its renders).
 pub fn render(seq: &Sequence, n: u64, settings: &Settings) -> Result<Frame, String> {
-    render_with(&World::new(seq.scene.clone()), seq, n, settings)
+    Ok(render_with(
+        &World::new(seq.scene.clone()),
+        seq,
+        n,
+        settings,
+    )?)
 }
 
 /// The reference `measure` compares against, for a scene whose paths are trees or not.

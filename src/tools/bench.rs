@@ -9,16 +9,16 @@ use crate::frame::Frame;
 use crate::output::{FileFormat, pattern::Pattern, png::Compression, stream::StreamFormat};
 use crate::progress::Progress;
 use crate::schedule::{self, Files, Job, Task};
-use crate::sequence::{self, Overrides, Sequence};
+use crate::sequence::{self, Sequence};
 use crate::tracer::{self, Kernel, World};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-const TALK: &str = include_str!("../sequences/talk.yaml");
-const TALK_ORBIT: &str = include_str!("../sequences/bench/talk_orbit.yaml");
-const TALK_POV: &str = include_str!("../sequences/bench/talk_orbit.pov");
+const TALK: &str = include_str!("../../sequences/talk.yaml");
+const TALK_ORBIT: &str = include_str!("../../sequences/bench/talk_orbit.yaml");
+const TALK_POV: &str = include_str!("../../sequences/bench/talk_orbit.pov");
 
 /// Median, min and max of some seconds.
 #[derive(Debug, Clone, Copy)]
@@ -47,12 +47,22 @@ fn repeat(runs: usize, mut f: impl FnMut() -> Result<(), String>) -> Result<Timi
     Ok(timing(t))
 }
 
-fn load(text: &str, size: (u64, u64)) -> Result<Sequence, String> {
-    let o = Overrides {
-        size: Some(size),
-        ..Overrides::default()
-    };
-    sequence::parse(Path::new("bench.yaml"), text, &o).map_err(|e| e.to_string())
+fn load(text: &str, (width, height): (u32, u32)) -> Result<Sequence, String> {
+    let mut seq = sequence::parse(Path::new("bench.yaml"), text).map_err(|e| e.to_string())?;
+    (seq.settings.width, seq.settings.height) = (width, height);
+    Ok(seq)
+}
+
+/// A warning when other work already keeps at least half a core busy (the first field of
+/// `/proc/loadavg`, the 1-minute load average): every figure is then lower than this machine
+/// can do, and thread scaling flatter.
+fn busy_warning(loadavg: &str, cores: usize) -> Option<String> {
+    let load: f64 = loadavg.split_whitespace().next()?.parse().ok()?;
+    (load >= 0.5).then(|| {
+        format!(
+            "warning: the machine is busy (load average {load:.1} on {cores} cores before starting): figures will be lower and thread scaling flatter than this machine can do; rerun when it is idle"
+        )
+    })
 }
 
 fn pool(threads: usize) -> Result<rayon::ThreadPool, String> {
@@ -185,6 +195,10 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
         "each figure: median (min-max) of {} runs; reproduce with the command after it",
         o.runs
     ));
+    let loadavg = std::fs::read_to_string("/proc/loadavg").ok();
+    if let Some(w) = loadavg.as_deref().and_then(|l| busy_warning(l, cores)) {
+        out(&w);
+    }
     let talk = load(TALK, (w, h))?;
     let world = World::new(talk.scene.clone());
     let cmd = |name: &str| {
@@ -210,10 +224,14 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
         ));
         if want("threads") && cores > 1 {
             let (t1, _) = render_only(&world, &talk, 1, o.runs)?;
+            let speedup = t1.median / t2.median;
+            let busy = match speedup < 1.0 {
+                true => " (below 1x: other work had the cores; this says nothing of scaling)",
+                false => "",
+            };
             out(&format!(
-                "  1 thread: {:.1} frames/s; {cores} threads over 1: {:.2}x   [{}]",
+                "  1 thread: {:.1} frames/s; {cores} threads over 1: {speedup:.2}x{busy}   [{}]",
                 1.0 / t1.median,
-                t1.median / t2.median,
                 cmd("threads")
             ));
         }
@@ -285,7 +303,7 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
 /// What glass costs: the talk with its red sphere turned to Fresnel glass, against the talk.
 fn glass(
     o: &Options,
-    (w, h): (u64, u64),
+    (w, h): (u32, u32),
     talk: &Sequence,
     world: &World,
     out: &mut dyn FnMut(&str),
@@ -402,8 +420,7 @@ fn scaling(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), Stri
     ));
     let mut scenes = Vec::new();
     for &n in counts {
-        let seq = sequence::parse(Path::new("field.yaml"), &field(n), &Overrides::default())
-            .map_err(|e| e.to_string())?;
+        let seq = sequence::parse(Path::new("field.yaml"), &field(n)).map_err(|e| e.to_string())?;
         let start = Instant::now();
         let world = World::new(seq.scene.clone());
         scenes.push((seq, world, start.elapsed().as_secs_f64()));
@@ -518,4 +535,17 @@ fn today() -> String {
         .ok()
         .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
         .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_busy_machine_is_named() {
+        assert_eq!(busy_warning("0.12 0.30 0.40 1/200 999", 2), None);
+        let w = busy_warning("1.93 1.20 0.40 3/200 999", 2).unwrap();
+        assert!(w.contains("busy (load average 1.9 on 2 cores"), "{w}");
+        assert_eq!(busy_warning("garbage", 2), None);
+    }
 }

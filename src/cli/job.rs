@@ -1,0 +1,152 @@
+//! One typed job from the sequence file and the job arguments, in one step: the file is read
+//! and checked by `sequence::load` alone, then the command line's values replace the file's
+//! (clap has already checked each of them), the frame spec and shard become this task's
+//! frames, and the output pattern and format become the file sink.
+
+use super::{BitDepth, JobArgs, ShardSpec, resolve_shard};
+use crate::Error;
+use crate::frameset::FrameSet;
+use crate::output::FileFormat;
+use crate::schedule::Files;
+use crate::sequence::{self, Quality, Sequence, output_pattern, preset};
+
+/// A sequence with the command line applied, and the frames this task renders.
+#[derive(Debug)]
+pub struct Job {
+    pub seq: Sequence,
+    pub frames: FrameSet,
+    /// `--output` was given (with `--pipe`, files are written only then).
+    pub output_given: bool,
+    pub sixteen_bit: bool,
+}
+
+impl Job {
+    /// Loads the file and applies the arguments.
+    pub fn new(args: &JobArgs) -> Result<Job, Error> {
+        Job::load(args, false)
+    }
+
+    /// `new` for `status`, the final check of a whole farm job: `--shard auto` outside a job
+    /// array (no scheduler index set) means every shard, so the array script's own line can
+    /// be repeated with `status` after the array ends.
+    pub fn for_status(args: &JobArgs) -> Result<Job, Error> {
+        Job::load(args, true)
+    }
+
+    fn load(args: &JobArgs, every_shard: bool) -> Result<Job, Error> {
+        let mut seq = sequence::load(&args.file)?;
+        apply(&mut seq, args)?;
+        let frames = frames(&seq, args, every_shard)?;
+        Ok(Job {
+            seq,
+            frames,
+            output_given: args.output.is_some(),
+            sixteen_bit: args.bit_depth == BitDepth::Sixteen,
+        })
+    }
+
+    /// The file pattern and format. A pattern without a frame number holds one frame: the
+    /// one selected.
+    pub fn files(&self, args: &JobArgs) -> Result<Files, Error> {
+        let seq = &self.seq;
+        let mut pattern =
+            output_pattern(&seq.output, seq.timeline.last_frame()).map_err(Error::Usage)?;
+        if pattern.is_single() {
+            if self.frames.len() != 1 {
+                return Err(Error::Usage(format!(
+                    "output `{}` has no `#` run or %04d for the frame number, so it holds one frame, but {} frames are selected (select one with --frames, or use a pattern such as frame_####.png)",
+                    seq.output,
+                    self.frames.len()
+                )));
+            }
+            pattern = pattern.holding(self.frames.iter().next().unwrap_or_default());
+        }
+        let format = FileFormat::for_extension(
+            &pattern.extension(),
+            self.sixteen_bit,
+            args.png_compression,
+            args.exr_precision,
+        )
+        .map_err(|e| Error::Usage(format!("output `{}`: {e}", seq.output)))?;
+        let exr = matches!(format, FileFormat::Exr { .. });
+        if exr && self.sixteen_bit {
+            return Err(Error::Usage(
+                "--bit-depth 16 applies to PNG files and streams; EXR frames are float".into(),
+            ));
+        }
+        if seq.settings.depth && !exr {
+            return Err(Error::Usage(format!(
+                "--depth (render.depth) needs EXR frames to hold the Z channel; `{}` is not .exr",
+                seq.output
+            )));
+        }
+        Ok(Files { pattern, format })
+    }
+}
+
+/// The command line's values replace the file's: a preset first, then the values it sets.
+fn apply(seq: &mut Sequence, o: &JobArgs) -> Result<(), Error> {
+    if let Some(q) = o.quality {
+        preset(&mut seq.settings, q);
+    }
+    let draft = o.quality.or(seq.quality) == Some(Quality::Draft);
+    if draft && o.size.is_none() {
+        seq.settings.width = seq.settings.width.div_ceil(2);
+        seq.settings.height = seq.settings.height.div_ceil(2);
+    }
+    if let Some(n) = o.samples {
+        // `--samples N` means N uniform samples, whatever the file or preset chose.
+        seq.settings.samples = n;
+        seq.settings.adaptive = None;
+    }
+    if let Some((w, h)) = o.size {
+        (seq.settings.width, seq.settings.height) = (w, h);
+    }
+    if let Some(d) = o.max_depth {
+        seq.settings.max_depth = d;
+    }
+    if let Some(n) = o.first_frame {
+        seq.timeline.clock.first_frame = n;
+    }
+    if let Some(out) = &o.output {
+        seq.output = out.clone();
+    }
+    seq.settings.depth |= o.depth;
+    seq.settings.alpha |= o.alpha;
+    if let Some(e) = o.encoding {
+        seq.settings.encoding = e;
+    }
+    if let Some(e) = o.exposure {
+        seq.settings.exposure =
+            sequence::exposure(e).map_err(|m| Error::Usage(format!("--exposure: {m}")))?;
+    }
+    output_pattern(&seq.output, seq.timeline.last_frame())
+        .map_err(|m| Error::Usage(format!("--output: {m}")))?;
+    Ok(())
+}
+
+/// This task's frames: the spec's (default all), then the shard's share (`every_shard`: all
+/// of them when `--shard auto` finds no scheduler index).
+fn frames(seq: &Sequence, args: &JobArgs, every_shard: bool) -> Result<FrameSet, Error> {
+    let (first, last) = (seq.timeline.first_frame(), seq.timeline.last_frame());
+    let mut frames = match &args.frames {
+        Some(spec) => spec
+            .frames(first, last)
+            .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
+        None => FrameSet::range(first, last, 1),
+    };
+    let env = |name: &str| std::env::var(name).ok();
+    let unscheduled = ["SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"]
+        .iter()
+        .all(|v| env(v).is_none());
+    let shard = match args.shard {
+        Some(ShardSpec::Auto) if every_shard && unscheduled => None,
+        other => other,
+    };
+    if let Some(spec) = shard {
+        let (k, n) = resolve_shard(spec, args.shard_count, &env)
+            .map_err(|e| Error::Usage(format!("--shard: {e}")))?;
+        frames = frames.shard(k, n);
+    }
+    Ok(frames)
+}

@@ -1,0 +1,185 @@
+//! How load errors read: serde_yaml's messages made plain, long ones clipped, numbers short.
+
+use super::*;
+
+pub(super) fn yaml_error(file: &Path, e: &serde_yaml::Error) -> LoadError {
+    let (line, col) = e.location().map_or((1, 1), |l| (l.line(), l.column()));
+    let text = e.to_string();
+    // serde_yaml appends " at line L column C" (and libyaml "..., while parsing ... at ...");
+    // the position is already in front, so keep only the first clause.
+    let message = match text.find(" at line ") {
+        Some(i) => text[..i].to_string(),
+        None => text,
+    };
+    // serde_yaml's two guards against hostile documents say little on their own.
+    let message = match message.as_str() {
+        "" => "invalid YAML".into(),
+        "recursion limit exceeded" => {
+            "nested too deeply, counting what aliases repeat (recursion limit exceeded)".into()
+        }
+        "repetition limit exceeded" => {
+            "aliases repeat too many nodes (repetition limit exceeded)".into()
+        }
+        _ => out_of_range(&message)
+            .or_else(|| tagged_number(&message))
+            .unwrap_or_else(|| rust_types_in_words(&message)),
+    };
+    LoadError::Invalid {
+        file: file.to_owned(),
+        line,
+        col,
+        message: clip(message),
+    }
+}
+
+/// serde's `expected f64` and `expected u32` in the words of the README.
+fn rust_types_in_words(message: &str) -> String {
+    let words = [
+        ("expected f64", "expected a number"),
+        ("expected u64", "expected a whole number (0 or more)"),
+        ("expected u32", "expected a whole number (0 or more)"),
+        ("expected i64", "expected a whole number"),
+        ("expected a boolean", "expected true or false"),
+    ];
+    let mut message = message.to_string();
+    for (rust, plain) in words {
+        if let Some(rest) = message.strip_suffix(rust) {
+            message = format!("{rest}{plain}");
+        }
+    }
+    message
+}
+
+/// serde_yaml reads a number beyond f64 (`1e400`) as a string and one beyond 64 bits as an
+/// i128/u128, then reports a type error; say instead that the number is out of range.
+pub(super) fn out_of_range(message: &str) -> Option<String> {
+    let (field, rest) = match message.split_once(": invalid type: ") {
+        Some((field, rest)) => (format!("{field}: "), rest),
+        None => (String::new(), message.strip_prefix("invalid type: ")?),
+    };
+    if let Some(s) = rest.strip_prefix("string \"") {
+        let s = s.strip_suffix("\", expected f64")?;
+        let digits = s
+            .bytes()
+            .all(|b| b.is_ascii_digit() || b"+-.eE".contains(&b));
+        s.parse::<f64>()
+            .ok()
+            .filter(|v| digits && v.is_infinite())?;
+        return Some(format!(
+            "{field}must be within ±{MAX_MAGNITUDE:e} (lengths are squared) (got {s})"
+        ));
+    }
+    let s = rest.strip_prefix("integer `")?;
+    let s = ["u128", "i128"]
+        .iter()
+        .flat_map(|t| ["u64", "i64"].map(|e| format!("` as {t}, expected {e}")))
+        .find_map(|suffix| s.strip_suffix(suffix.as_str()))?;
+    Some(format!("{field}number out of range (got {s})"))
+}
+
+/// serde_yaml reads a tagged, quoted number (`fps: !!float "24"`) as a number and then refuses
+/// it for the very type it is (`invalid type: floating point `24.0`, expected f64`): say what
+/// to write instead.
+pub(super) fn tagged_number(message: &str) -> Option<String> {
+    let (field, rest) = message.split_once(": invalid type: ")?;
+    let value = match rest.strip_prefix("floating point `") {
+        Some(r) => r.strip_suffix("`, expected f64")?,
+        None => {
+            let (value, expected) = rest.strip_prefix("integer `")?.split_once("`, expected ")?;
+            ["f64", "u64", "i64"].contains(&expected).then_some(value)?
+        }
+    };
+    let value = value.parse::<f64>().map_or(value.to_string(), num);
+    // `timeline.fps` → `fps: 24`; a list element (`center[1]`) → `0`.
+    let plain = match field.ends_with(']') {
+        true => value.clone(),
+        false => format!("{}: {value}", field.rsplit('.').next().unwrap_or(field)),
+    };
+    Some(format!(
+        "{field}: a tagged, quoted number such as `!!float \"{value}\"` is not read as a number; write it plainly, without tag or quotes: `{plain}`"
+    ))
+}
+
+/// Longest error message shown whole; longer ones quote some huge value from the file.
+pub(super) const MAX_MESSAGE: usize = 400;
+
+/// `message`, cut in the middle when it is too long to read.
+pub(super) fn clip(message: String) -> String {
+    if message.len() <= MAX_MESSAGE {
+        return message;
+    }
+    let mut head = MAX_MESSAGE / 2;
+    while !message.is_char_boundary(head) {
+        head -= 1;
+    }
+    let mut tail = message.len() - MAX_MESSAGE / 4;
+    while !message.is_char_boundary(tail) {
+        tail += 1;
+    }
+    format!(
+        "{} [… {} bytes …] {}",
+        &message[..head],
+        tail - head,
+        &message[tail..]
+    )
+}
+
+pub(super) fn got(v: impl Display) -> String {
+    format!("(got {v})")
+}
+
+/// `(got X)` for a number, short (see `num`).
+pub(super) fn got_num(v: f64) -> String {
+    got(num(v))
+}
+
+/// A number as messages show it: exactly as written when that takes at most 6 significant
+/// digits (`0.35`, `10000000`), otherwise rounded to 6, plain from 1e-4 up to 1e6 and in
+/// exponent form beyond (`1e-300`, never 300 digits).
+pub fn num(v: f64) -> String {
+    let exact = format!("{v}");
+    let significant = exact
+        .trim_start_matches('-')
+        .replace('.', "")
+        .trim_matches('0')
+        .len();
+    if v == 0.0 || !v.is_finite() || ((1e-4..1e16).contains(&v.abs()) && significant <= 6) {
+        return exact;
+    }
+    let exponent = v.abs().log10().floor() as i32;
+    if (-4..6).contains(&exponent) {
+        let decimals = (5 - exponent).max(0) as usize;
+        return trim_zeros(&format!("{v:.decimals$}")).to_string();
+    }
+    let text = format!("{v:.5e}");
+    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+    format!("{}e{exponent}", trim_zeros(mantissa))
+}
+
+/// `1.500` → `1.5`, `2.000` → `2`; whole numbers without a point stay as they are.
+pub(super) fn trim_zeros(s: &str) -> &str {
+    match s.contains('.') {
+        true => s.trim_end_matches('0').trim_end_matches('.'),
+        false => s,
+    }
+}
+
+/// `[x, y, z]` with each number short (see `num`).
+pub(super) fn num3(v: DVec3) -> String {
+    format!("[{}, {}, {}]", num(v.x), num(v.y), num(v.z))
+}
+
+pub(super) fn fmt3(v: raw::V3) -> String {
+    num3(DVec3::from(v))
+}
+
+/// `s` cut in the middle when long: `aaaaaaaaaaaaaaaaaaaa…aaaaaaaa_0001.png`.
+pub(super) fn abbreviated(s: &str) -> String {
+    let chars: Vec<char> = s.chars().collect();
+    if chars.len() <= 48 {
+        return s.to_string();
+    }
+    let head: String = chars[..24].iter().collect();
+    let tail: String = chars[chars.len() - 20..].iter().collect();
+    format!("{head}…{tail}")
+}

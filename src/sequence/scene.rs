@@ -1,0 +1,247 @@
+//! `materials:`, `objects:` and `lights:` → the validated `Scene`'s parts.
+
+use super::*;
+
+pub(super) fn material(path: &str, m: &raw::Material) -> Check<Material> {
+    let shininess = m.shininess.unwrap_or(100.0);
+    let exponent = shininess / 4.0;
+    Ok(Material {
+        // x^e < 1e-30 ⇔ x < exp(−69.08 / e).
+        specular_floor: if exponent > 0.0 {
+            libm::exp(-69.08 / exponent)
+        } else {
+            0.0
+        },
+        ambient: color(&format!("{path}.ambient"), m.ambient)?,
+        diffuse: color(&format!("{path}.diffuse"), m.diffuse)?,
+        specular: color(&format!("{path}.specular"), m.specular)?,
+        exponent: in_range(
+            &format!("{path}.shininess"),
+            shininess,
+            0.0,
+            MAX_SHININESS,
+            &format!("in [0, {MAX_SHININESS}]"),
+        )? / 4.0,
+        reflection: in_range(
+            &format!("{path}.reflection"),
+            m.reflection.unwrap_or(0.0),
+            0.0,
+            1.0,
+            "in [0, 1]",
+        )?,
+        transmission: transmission(path, m)?,
+        ior: in_range(
+            &format!("{path}.ior"),
+            m.ior.unwrap_or(1.5),
+            1.0,
+            MAX_IOR,
+            &format!("in [1, {MAX_IOR}]"),
+        )?,
+        fresnel: m.fresnel,
+    })
+}
+
+/// Glass refracts at most as much as diamond's 2.42 several times over; beyond this an index
+/// means nothing physical.
+const MAX_IOR: f64 = 100.0;
+
+/// The transmission filter: each channel in [0, 1], and with the reflection at most 1, since
+/// a surface cannot pass on more light than it receives (Fresnel shares it out itself).
+fn transmission(path: &str, m: &raw::Material) -> Check<DVec3> {
+    if m.fresnel && m.reflection.is_some() {
+        return invalid(
+            format!("{path}.reflection"),
+            "with `fresnel: true` the Fresnel term decides how much is reflected; remove `reflection`",
+        );
+    }
+    let field = format!("{path}.transmission");
+    let Some(raw::Filter(v)) = m.transmission else {
+        return Ok(DVec3::ZERO);
+    };
+    let t = vector(&field, v)?;
+    if t.min_element() < 0.0 || t.max_element() > 1.0 {
+        return invalid(&field, format!("must be in [0, 1] {}", got(fmt3(v))));
+    }
+    let r = m.reflection.unwrap_or(0.0);
+    if !m.fresnel && r + t.max_element() > 1.0 {
+        return invalid(
+            &field,
+            format!(
+                "reflection + transmission must not exceed 1 in any channel: a surface cannot pass on more light than it receives {}",
+                got(format!("{} + {}", num(r), fmt3(v)))
+            ),
+        );
+    }
+    Ok(t)
+}
+
+pub(super) fn material_ref(
+    path: &str,
+    r: &raw::MaterialRef,
+    names: &[&str],
+    materials: &mut Vec<Material>,
+) -> Check<usize> {
+    match r {
+        raw::MaterialRef::Named(n) => names.iter().position(|m| m == n).map_or_else(
+            || {
+                let known = if names.is_empty() {
+                    "no materials are defined under `materials:`".to_string()
+                } else {
+                    format!("defined: {}", names.join(", "))
+                };
+                invalid(path, format!("unknown material `{n}` ({known})"))
+            },
+            Ok,
+        ),
+        raw::MaterialRef::Inline(m) => {
+            materials.push(material(path, m)?);
+            Ok(materials.len() - 1)
+        }
+    }
+}
+
+pub(super) fn exactly_one<T>(path: &str, options: &[(&str, Option<T>)]) -> Check<T>
+where
+    T: Copy,
+{
+    let given: Vec<&(&str, Option<T>)> = options.iter().filter(|(_, v)| v.is_some()).collect();
+    let names: Vec<&str> = options.iter().map(|(n, _)| *n).collect();
+    match given.as_slice() {
+        [(_, Some(v))] => Ok(*v),
+        [] => invalid(path, format!("needs one of: {}", names.join(", "))),
+        many => invalid(
+            path,
+            format!(
+                "give exactly one of {} per entry (got {})",
+                names.join(", "),
+                many.iter()
+                    .map(|(n, _)| *n)
+                    .collect::<Vec<_>>()
+                    .join(" and ")
+            ),
+        ),
+    }
+}
+
+pub(super) fn object(
+    path: &str,
+    o: &raw::Object,
+    names: &[&str],
+    materials: &mut Vec<Material>,
+) -> Check<Object> {
+    let which = exactly_one(
+        path,
+        &[
+            ("sphere", o.sphere.as_ref().map(|_| 0)),
+            ("plane", o.plane.as_ref().map(|_| 1)),
+        ],
+    )?;
+    if which == 0 {
+        let s = o.sphere.as_ref().expect("checked");
+        let p = format!("{path}.sphere");
+        Ok(Object {
+            shape: Shape::Sphere {
+                center: vector(&format!("{p}.center"), s.center)?,
+                radius: in_range(
+                    &format!("{p}.radius"),
+                    s.radius,
+                    MIN_RADIUS,
+                    MAX_MAGNITUDE,
+                    "a positive length in [1e-100, 1e100]",
+                )?,
+            },
+            material: material_ref(&format!("{p}.material"), &s.material, names, materials)?,
+        })
+    } else {
+        let s = o.plane.as_ref().expect("checked");
+        let p = format!("{path}.plane");
+        Ok(Object {
+            shape: Shape::Plane {
+                point: vector(&format!("{p}.point"), s.point)?,
+                normal: unit(&format!("{p}.normal"), s.normal)?,
+            },
+            material: material_ref(&format!("{p}.material"), &s.material, names, materials)?,
+        })
+    }
+}
+
+pub(super) fn intensity(
+    path: &str,
+    ambient: raw::V3,
+    diffuse: raw::V3,
+    specular: raw::V3,
+) -> Check<Intensity> {
+    Ok(Intensity {
+        ambient: color(&format!("{path}.ambient"), ambient)?,
+        diffuse: color(&format!("{path}.diffuse"), diffuse)?,
+        specular: color(&format!("{path}.specular"), specular)?,
+    })
+}
+
+pub(super) fn light(path: &str, l: &raw::Light) -> Check<Light> {
+    let which = exactly_one(
+        path,
+        &[
+            ("point", l.point.as_ref().map(|_| 0)),
+            ("directional", l.directional.as_ref().map(|_| 1)),
+            ("spot", l.spot.as_ref().map(|_| 2)),
+            ("ambient", l.ambient.as_ref().map(|_| 3)),
+        ],
+    )?;
+    Ok(match which {
+        0 => {
+            let p = l.point.as_ref().expect("checked");
+            let path = format!("{path}.point");
+            Light::Point {
+                position: vector(&format!("{path}.position"), p.position)?,
+                intensity: intensity(&path, p.ambient, p.diffuse, p.specular)?,
+            }
+        }
+        1 => {
+            let d = l.directional.as_ref().expect("checked");
+            let path = format!("{path}.directional");
+            Light::Directional {
+                to_light: -unit(&format!("{path}.direction"), d.direction)?,
+                intensity: intensity(&path, d.ambient, d.diffuse, d.specular)?,
+            }
+        }
+        2 => spot(&format!("{path}.spot"), l.spot.as_ref().expect("checked"))?,
+        _ => Light::Ambient {
+            color: color(
+                &format!("{path}.ambient.color"),
+                l.ambient.as_ref().expect("checked").color,
+            )?,
+        },
+    })
+}
+
+pub(super) fn spot(path: &str, s: &raw::SpotLight) -> Check<Light> {
+    let angle = |name: &str, v: f64| {
+        in_range(
+            &format!("{path}.{name}"),
+            v,
+            0.0,
+            180.0,
+            "an angle in [0, 180] degrees",
+        )
+    };
+    let inner = angle("inner_angle", s.inner_angle)?;
+    let outer = angle("outer_angle", s.outer_angle)?;
+    if inner > outer {
+        return invalid(
+            format!("{path}.inner_angle"),
+            format!(
+                "must not exceed outer_angle ({}) {}",
+                num(outer),
+                got_num(inner)
+            ),
+        );
+    }
+    Ok(Light::Spot {
+        position: vector(&format!("{path}.position"), s.position)?,
+        axis: unit(&format!("{path}.direction"), s.direction)?,
+        cos_inner: libm::cos(inner.to_radians()),
+        cos_outer: libm::cos(outer.to_radians()),
+        intensity: intensity(path, s.ambient, s.diffuse, s.specular)?,
+    })
+}

@@ -1,0 +1,280 @@
+//! `render:` and `output:` → `Settings` and the output pattern, with the limits both the file
+//! and the command line are held to.
+
+use super::*;
+
+pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
+    let check = |path: &str, r: Result<u32, String>| r.or_else(|m| invalid(path, m));
+    let mut s = Settings {
+        width: check("render.width", dimension(r.width.unwrap_or(1280)))?,
+        height: check("render.height", dimension(r.height.unwrap_or(720)))?,
+        max_depth: 3,
+        depth: r.depth.unwrap_or(false),
+        samples: 1,
+        adaptive: None,
+        sampler: match r.sampler {
+            Some(raw::Sampler::Random) => Sampler::Random,
+            _ => Sampler::Stratified,
+        },
+        shutter: shutter(r)?,
+        alpha: r.alpha.unwrap_or(false),
+        exposure: match r.exposure {
+            Some(e) => exposure(e).or_else(|m| invalid("render.exposure", m))?,
+            None => 0.0,
+        },
+        encoding: r.encoding.unwrap_or_default(),
+    };
+    if r.quality.is_none() && r.samples.is_none() && r.adaptive.is_none() {
+        default_sampling(&mut s);
+    }
+    pixels(s.width, s.height).or_else(|m| invalid("render.width", m))?;
+    if let Some(q) = r.quality {
+        preset(&mut s, q);
+    }
+    if let Some(d) = r.max_depth {
+        s.max_depth = check("render.max_depth", max_depth(d))?;
+    }
+    if let Some(n) = r.samples {
+        s.samples = check("render.samples", samples(n))?;
+    }
+    if let Some(a) = &r.adaptive {
+        let threshold = a.threshold.unwrap_or(DEFAULT_THRESHOLD);
+        in_range(
+            "render.adaptive.threshold",
+            threshold,
+            0.0,
+            1.0,
+            "in (0, 1]",
+        )?;
+        if threshold == 0.0 {
+            return invalid(
+                "render.adaptive.threshold",
+                "must be greater than 0 (got 0)",
+            );
+        }
+        let max_samples = check(
+            "render.adaptive.max_samples",
+            samples(a.max_samples.unwrap_or(DEFAULT_MAX_SAMPLES)),
+        )?;
+        s.adaptive = Some(Adaptive {
+            threshold: threshold as f32,
+            max_samples,
+        });
+    }
+    if let Some(a) = s.adaptive
+        && a.max_samples <= s.samples
+    {
+        return invalid(
+            "render.adaptive.max_samples",
+            format!(
+                "must exceed render.samples ({}) {}",
+                s.samples,
+                got(a.max_samples)
+            ),
+        );
+    }
+    Ok(s)
+}
+
+/// Largest |render.exposure|, in stops: 2^64 times the brightest colour still fits an f32.
+pub const MAX_EXPOSURE: f64 = 64.0;
+
+/// An exposure in stops, as the file and `--exposure` may give it.
+pub fn exposure(v: f64) -> Result<f64, String> {
+    if v.is_finite() && v.abs() <= MAX_EXPOSURE {
+        Ok(v)
+    } else {
+        Err(format!(
+            "must be within ±{MAX_EXPOSURE} stops {}",
+            got_num(v)
+        ))
+    }
+}
+
+/// Sampling of a file that sets none (no `samples`, `adaptive` or `quality`): antialiased
+/// frames at about the cost one sample had before the packet tracer (see the README).
+fn default_sampling(s: &mut Settings) {
+    s.samples = DEFAULT_SAMPLES;
+    s.adaptive = Some(Adaptive {
+        threshold: DEFAULT_THRESHOLD as f32,
+        max_samples: DEFAULT_SAMPLING_MAX,
+    });
+}
+
+/// `render.samples` when a file sets no sampling.
+pub const DEFAULT_SAMPLES: u32 = 2;
+/// `render.adaptive.max_samples` when a file sets no sampling.
+pub const DEFAULT_SAMPLING_MAX: u32 = 8;
+
+/// `render.shutter` and `render.shutter_offset`; None when the shutter angle is 0.
+fn shutter(r: &raw::Render) -> Check<Option<Shutter>> {
+    let angle = in_range(
+        "render.shutter",
+        r.shutter.unwrap_or(0.0),
+        0.0,
+        360.0,
+        "an angle in [0, 360] degrees (0: no motion blur, 180: film)",
+    )?;
+    let offset = in_range(
+        "render.shutter_offset",
+        r.shutter_offset.unwrap_or(0.0),
+        -0.5,
+        0.5,
+        "in [-0.5, 0.5] (0: open interval centred on the frame time, 0.5: opening at it, -0.5: closing at it)",
+    )?;
+    Ok((angle > 0.0).then_some(Shutter { angle, offset }))
+}
+
+/// Default `render.adaptive.threshold`: a linear colour difference of about 8/255.
+pub const DEFAULT_THRESHOLD: f64 = 0.03;
+
+/// Default `render.adaptive.max_samples`.
+pub const DEFAULT_MAX_SAMPLES: u64 = 32;
+
+/// Largest samples per pixel accepted.
+pub const MAX_SAMPLES: u64 = 4096;
+
+/// What a quality preset sets; explicit settings at the same or a later level override it.
+pub fn preset(s: &mut Settings, q: Quality) {
+    let (samples, adaptive, depth) = match q {
+        Quality::Draft => (1, None, 2),
+        Quality::Preview => (4, None, 3),
+        Quality::Final => (
+            4,
+            Some(Adaptive {
+                threshold: DEFAULT_THRESHOLD as f32,
+                max_samples: 64,
+            }),
+            5,
+        ),
+    };
+    s.samples = samples;
+    s.adaptive = adaptive;
+    s.max_depth = depth;
+}
+
+pub(super) fn samples(v: u64) -> Result<u32, String> {
+    if (1..=MAX_SAMPLES).contains(&v) {
+        Ok(v as u32)
+    } else {
+        Err(format!(
+            "must be 1 to {MAX_SAMPLES} samples per pixel (got {v})"
+        ))
+    }
+}
+
+pub(super) fn pixels(w: u32, h: u32) -> Result<(), String> {
+    let n = u64::from(w) * u64::from(h);
+    if n > MAX_PIXELS {
+        return Err(format!(
+            "{w}x{h} is {n} pixels; a frame may have at most {MAX_PIXELS} (e.g. 8192x8192)"
+        ));
+    }
+    Ok(())
+}
+
+pub(super) fn dimension(v: u64) -> Result<u32, String> {
+    if (1..=MAX_DIMENSION).contains(&v) {
+        Ok(v as u32)
+    } else {
+        Err(format!("must be 1 to {MAX_DIMENSION} pixels (got {v})"))
+    }
+}
+
+pub(super) fn max_depth(v: u64) -> Result<u32, String> {
+    if (1..=MAX_DEPTH).contains(&v) {
+        Ok(v as u32)
+    } else {
+        Err(format!(
+            "must be 1 (no reflections) to {MAX_DEPTH} (got {v})"
+        ))
+    }
+}
+
+/// Longest path the kernel takes, in bytes (PATH_MAX less its NUL).
+pub(super) const MAX_PATH_BYTES: usize = 4095;
+
+/// A pattern that names frames numbered up to `last_frame`, of a type rayreel writes, in
+/// paths the file system can take.
+pub(crate) fn output_pattern(output: &str, last_frame: u64) -> Result<Pattern, String> {
+    if output.contains('\0') {
+        return Err(format!(
+            "contains a NUL byte, which no file name may hold (got `{}`)",
+            output.replace('\0', "\\0")
+        ));
+    }
+    let pattern = Pattern::new(output, last_frame)?;
+    // No frame's path is longer than the last one's (numbers are padded to one width or not).
+    let last = pattern.frame_path(last_frame);
+    for part in last.iter() {
+        let part = part.to_string_lossy();
+        if part.len() > atomic::NAME_MAX {
+            return Err(format!(
+                "the name `{}` is {} bytes; a file or directory name may have at most {}",
+                abbreviated(&part),
+                part.len(),
+                atomic::NAME_MAX
+            ));
+        }
+    }
+    if last.as_os_str().len() > MAX_PATH_BYTES {
+        return Err(format!(
+            "a frame's path is {} bytes (`{}`); a path may have at most {MAX_PATH_BYTES}",
+            last.as_os_str().len(),
+            abbreviated(&last.to_string_lossy())
+        ));
+    }
+    match pattern.extension().as_str() {
+        "png" | "exr" => Ok(pattern),
+        other => Err(format!(
+            "unsupported file type `.{other}`; frames are .png or .exr (got `{output}`)"
+        )),
+    }
+}
+
+/// A sequence file may come from someone else, so its `output` stays below the current
+/// directory; the user can still write anywhere with `--output`, which they typed themselves.
+pub(super) fn contained(path: &str, output: &str) -> Check<()> {
+    let p = Path::new(output);
+    let climbs = p
+        .components()
+        .any(|c| matches!(c, std::path::Component::ParentDir));
+    if p.is_absolute() || climbs || output.starts_with('~') {
+        return invalid(
+            path,
+            format!(
+                "a sequence file may only write below the current directory, so an absolute path or `..` is refused here (got `{output}`); if you mean it, give it on the command line with --output"
+            ),
+        );
+    }
+    if let Some(dir) = escapes(output) {
+        return invalid(
+            path,
+            format!(
+                "`{output}` leads outside the current directory: its directory is {} once symbolic links are followed; a sequence file may only write below the current directory (if you mean it, give it on the command line with --output)",
+                dir.display()
+            ),
+        );
+    }
+    Ok(())
+}
+
+/// Where the directory of a relative `output` really is when it is not below the current
+/// directory (a symbolic link on the way leads elsewhere, or leads nowhere); `None` when it is
+/// inside. The part that does not exist yet will be created as plain directories.
+pub fn escapes(output: &str) -> Option<PathBuf> {
+    let cwd = std::fs::canonicalize(".").ok()?;
+    let mut existing = Path::new(output).parent().unwrap_or(Path::new(""));
+    let mut missing = Vec::new();
+    while !existing.as_os_str().is_empty() && std::fs::symlink_metadata(existing).is_err() {
+        missing.push(existing.file_name()?);
+        existing = existing.parent().unwrap_or(Path::new(""));
+    }
+    let base = match existing.as_os_str().is_empty() {
+        true => cwd.clone(),
+        // An entry that exists but does not resolve is a link that leads nowhere.
+        false => std::fs::canonicalize(existing).unwrap_or_else(|_| existing.to_path_buf()),
+    };
+    let dir = missing.iter().rev().fold(base, |d, part| d.join(part));
+    (!dir.starts_with(&cwd)).then_some(dir)
+}

@@ -1,0 +1,131 @@
+//! `rayreel preview FILE`: two pictures to check a sequence before spending hours rendering it.
+//!
+//! * The **path plot** shows the scene from above (x across, z down) and from the side (z
+//!   across, y up), each panel to scale (one scale for both of its axes). Spheres are discs in
+//!   their material's colour; planes and giant spheres (a floor of radius 9000) would cover
+//!   everything, so they are drawn as the solid region they cut from the panel's slice plane,
+//!   which passes through the camera path's mean height (top) or mean x (side). On top: the
+//!   camera at every frame (a polyline, with dots when they are far enough apart to show
+//!   speed), numbered keyframes, look-at targets, view-direction ticks, start, end and lights.
+//!   Frames where the camera is inside a sphere, behind a plane or rolling over are red and
+//!   come back as warnings.
+//! * The **contact sheet** renders a few frames small at draft depth, `columns = ceil(sqrt(N))`
+//!   tiles per row, each with its frame number and time underneath.
+//!
+//! Everything is drawn with plain pixel writes and a built-in 5×7 font, so the preview needs
+//! no font or plotting crate and is byte-identical everywhere.
+
+mod canvas;
+mod checks;
+mod draw;
+mod font;
+mod panel;
+mod path_plot;
+mod plot;
+mod sheet;
+mod speed;
+mod style;
+
+use canvas::*;
+use checks::*;
+use draw::*;
+use font::*;
+use panel::*;
+use plot::*;
+use style::*;
+
+pub use checks::inside_warnings;
+pub use panel::{Panel, panels};
+pub use path_plot::path_plot;
+pub use sheet::{SheetLayout, TileOrigin, contact_sheet};
+pub use style::{BAD, PATH};
+
+use crate::camera::{Camera, Pose};
+use crate::scene::{Light, Material, Shape};
+use crate::schedule::render_with;
+use crate::sequence::Sequence;
+use crate::timeline::{Path as TimelinePath, Timeline};
+use crate::tracer::World;
+use glam::DVec3;
+use image::{Rgb, RgbImage};
+use std::path::Path;
+
+/// Default number of contact-sheet tiles.
+pub const DEFAULT_TILES: u64 = 12;
+/// Most tiles one sheet holds: beyond this the picture stops being a glance.
+pub const MAX_TILES: u64 = 400;
+/// Default tile width in pixels; the height follows the sequence's aspect ratio.
+pub const TILE_WIDTH: u32 = 256;
+
+// ---------------------------------------------------------------------------------------------
+// Which frames, and how small
+
+/// `n` frames spread evenly over `0..frame_count`, first and last included:
+/// n_k = round(k·(frame_count − 1)/(n − 1)), ascending and without repeats.
+pub fn evenly_spaced(frame_count: u64, n: u64) -> Vec<u64> {
+    if frame_count == 0 || n == 0 {
+        return Vec::new();
+    }
+    if n == 1 {
+        return vec![0];
+    }
+    // Steps shorter than one frame round onto every frame: skip building n values.
+    if n >= frame_count {
+        return (0..frame_count).collect();
+    }
+    let (last, d) = (u128::from(frame_count - 1), u128::from(n - 1));
+    // Integer rounding (half up) so the choice is exact for any frame count.
+    let mut out: Vec<u64> = (0..u128::from(n))
+        .map(|k| ((2 * k * last + d) / (2 * d)) as u64)
+        .collect();
+    out.dedup();
+    out
+}
+
+/// The sequence as the contact sheet renders it: the draft preset (1 sample, 2 surfaces per
+/// path, which keeps reflections visible but cheap) at `tile_w`×`tile_h` pixels, opaque (the
+/// sheet shows the background), in the file's encoding and exposure.
+pub fn draft(seq: &Sequence, tile_w: u32, tile_h: u32) -> Sequence {
+    let mut d = seq.clone();
+    crate::sequence::preset(&mut d.settings, crate::sequence::Quality::Draft);
+    d.settings.width = tile_w;
+    d.settings.height = tile_h;
+    d.settings.alpha = false;
+    d
+}
+
+/// The tile height for `tile_w` with the sequence's aspect ratio, rounded, at least 1.
+pub fn tile_height(seq: &Sequence, tile_w: u32) -> u32 {
+    let (w, h) = (
+        f64::from(seq.settings.width),
+        f64::from(seq.settings.height),
+    );
+    ((f64::from(tile_w) * h / w).round() as u32).max(1)
+}
+
+/// Encodes `img` as PNG and writes it atomically (a complete file or none) to `path`.
+pub fn write_png(path: &Path, img: &RgbImage) -> Result<(), String> {
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, image::ImageFormat::Png)
+        .map_err(|e| format!("{}: cannot encode: {e}", path.display()))?;
+    crate::output::atomic::write_atomic(path, bytes.get_ref())
+        .map_err(|e| format!("{}: cannot write: {e}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn evenly_spaced_hits_both_ends() {
+        assert_eq!(evenly_spaced(144, 12).first(), Some(&0));
+        assert_eq!(evenly_spaced(144, 12).last(), Some(&143));
+        assert_eq!(evenly_spaced(144, 12).len(), 12);
+        assert_eq!(evenly_spaced(5, 3), vec![0, 2, 4]);
+        assert_eq!(evenly_spaced(4, 12), vec![0, 1, 2, 3]);
+        assert_eq!(evenly_spaced(10, 1), vec![0]);
+        assert_eq!(evenly_spaced(1, 12), vec![0]);
+        // round(k·3/2) for k = 0..2 is 0, 2 (1.5 rounds up), 3.
+        assert_eq!(evenly_spaced(4, 3), vec![0, 2, 3]);
+    }
+}

@@ -1,0 +1,164 @@
+//! What the path plot shows, computed once from the sequence: the sampled camera path, its
+//! problems, keyframes, targets and the box both panels are fitted to.
+
+use super::*;
+
+/// Above this many frames the path is drawn from evenly spaced samples: a smooth path loses
+/// nothing visible, and the plot stays fast for timelines of millions of frames.
+pub(super) const MAX_PATH_SAMPLES: u64 = 100_000;
+
+/// A sphere this many times larger than the whole camera motion and view (a floor of radius
+/// 9000, a sky dome) is scenery: its silhouette would fill both panels, so it is drawn like a
+/// plane and left out of the fit.
+pub(super) const HUGE_SPHERE: f64 = 10.0;
+
+/// Look-at targets and lights farther out than this fraction of the scene's size (beyond the
+/// box of path and objects) would shrink the scene to a speck (a sun at 1e5); they are drawn
+/// at the panel edge with their coordinates instead of being fitted.
+pub(super) const EXTRA_REACH: f64 = 0.5;
+
+/// View-direction ticks drawn along the path.
+pub(super) const TICKS: u64 = 12;
+
+/// Everything the path plot draws, computed once from the sequence.
+pub(super) struct Plot {
+    /// (frame, pose) for every frame, or evenly spaced samples of very long timelines.
+    pub(super) samples: Vec<(u64, Pose)>,
+    /// Per sample: the camera is inside an object or rolls over there.
+    pub(super) bad: Vec<bool>,
+    pub(super) warnings: Vec<String>,
+    /// Keyframe (position, look_at), numbered by index.
+    pub(super) keys: Vec<(DVec3, DVec3)>,
+    /// Distinct look-at targets of the keyframes, or the orbit's.
+    pub(super) targets: Vec<DVec3>,
+    /// Per object: a sphere too big to draw as a disc.
+    pub(super) huge: Vec<bool>,
+    /// The box the panels are fitted to.
+    pub(super) fit: Bounds,
+}
+
+impl Plot {
+    pub(super) fn new(seq: &Sequence) -> Plot {
+        let t = &seq.timeline;
+        let samples: Vec<(u64, Pose)> = evenly_spaced(t.frame_count, MAX_PATH_SAMPLES)
+            .into_iter()
+            .map(|n| n + t.first_frame())
+            .map(|n| (n, t.pose_of(n)))
+            .collect();
+        let (bad, warnings) = problems(seq, &samples);
+        let (keys, targets) = keys_and_targets(t);
+        let huge = huge_spheres(seq, &samples);
+        let mut plot = Plot {
+            samples,
+            bad,
+            warnings,
+            keys,
+            targets,
+            huge,
+            fit: Bounds::EMPTY,
+        };
+        plot.fit = fit(seq, &plot);
+        plot
+    }
+}
+
+pub(super) fn keys_and_targets(t: &Timeline) -> (Vec<(DVec3, DVec3)>, Vec<DVec3>) {
+    match &t.path {
+        TimelinePath::Orbit(o) => (Vec::new(), vec![o.look_at]),
+        TimelinePath::Keys(keyed) => {
+            let keys = &keyed.keys;
+            let mut targets: Vec<DVec3> = Vec::new();
+            for k in keys {
+                if !targets.contains(&k.pose.look_at) {
+                    targets.push(k.pose.look_at);
+                }
+            }
+            let keyed = keys.iter().map(|k| (k.pose.position, k.pose.look_at));
+            (keyed.collect(), targets)
+        }
+    }
+}
+
+/// Point and spot lights: (index in `lights`, position).
+pub(super) fn positioned_lights(seq: &Sequence) -> Vec<(usize, DVec3)> {
+    let at = |l: &Light| match *l {
+        Light::Point { position, .. } | Light::Spot { position, .. } => Some(position),
+        _ => None,
+    };
+    let lights = seq.scene.lights.iter().enumerate();
+    lights.filter_map(|(i, l)| at(l).map(|p| (i, p))).collect()
+}
+
+/// The box both panels show: the camera path, the keyframes (the last may lie beyond the last
+/// frame) and the ordinary spheres, plus look-at targets and lights not far outside them.
+pub(super) fn fit(seq: &Sequence, plot: &Plot) -> Bounds {
+    let mut core = Bounds::EMPTY;
+    let keys = plot.keys.iter().map(|k| k.0);
+    for p in plot.samples.iter().map(|(_, p)| p.position).chain(keys) {
+        core.add(p);
+    }
+    for (o, &huge) in seq.scene.objects.iter().zip(&plot.huge) {
+        if let (Shape::Sphere { center, radius }, false) = (o.shape, huge) {
+            core.add(center - DVec3::splat(radius));
+            core.add(center + DVec3::splat(radius));
+        }
+    }
+    // A still camera with nothing around it still needs a size: its distance to the target.
+    let first = plot.samples[0].1;
+    let floor = first.position.distance(first.look_at).max(1e-300);
+    let size = core.size().max_element().max(floor);
+    let near = core.grown(EXTRA_REACH * size);
+    let mut all = core;
+    let lights = positioned_lights(seq).into_iter().map(|(_, p)| p);
+    for p in plot.targets.iter().copied().chain(lights) {
+        if near.contains(p) {
+            all.add(p);
+        }
+    }
+    // No axis may be flat, or a panel's scale would be infinite.
+    let min = 0.1 * all.size().max_element().max(floor);
+    all.at_least(min)
+}
+
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Bounds {
+    pub(super) min: DVec3,
+    pub(super) max: DVec3,
+}
+
+impl Bounds {
+    pub(super) const EMPTY: Bounds = Bounds {
+        min: DVec3::INFINITY,
+        max: DVec3::NEG_INFINITY,
+    };
+
+    pub(super) fn add(&mut self, p: DVec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    pub(super) fn size(&self) -> DVec3 {
+        (self.max - self.min).max(DVec3::ZERO)
+    }
+
+    pub(super) fn grown(&self, by: f64) -> Bounds {
+        Bounds {
+            min: self.min - DVec3::splat(by),
+            max: self.max + DVec3::splat(by),
+        }
+    }
+
+    pub(super) fn contains(&self, p: DVec3) -> bool {
+        p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+
+    /// Widens every axis shorter than `min` around its middle.
+    pub(super) fn at_least(&self, min: f64) -> Bounds {
+        let mid = (self.min + self.max) / 2.0;
+        let half = self.size().max(DVec3::splat(min)) / 2.0;
+        Bounds {
+            min: mid - half,
+            max: mid + half,
+        }
+    }
+}
