@@ -63,6 +63,46 @@ fn print_ffmpeg_pastes_into_a_shell_for_streams_and_files() {
     );
     assert!(bash_parses(&tmp, &line), "{line}");
     assert!(text.contains("65x37 is odd"), "{text}");
+    // RGBA files: ProRes 4444 keeps the alpha H.264 would drop, and takes the odd size.
+    let rgba = [
+        &args[..],
+        &["-o", "rgba/f_####.png", "--alpha", "--print-ffmpeg"],
+    ]
+    .concat();
+    let out = run_in(&tmp, &rgba);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stderr(&out);
+    let line = ffmpeg_line(&text);
+    assert_eq!(
+        line,
+        "ffmpeg -framerate 24 -i rgba/f_%04d.png -c:v prores_ks -profile:v 4444 -pix_fmt yuva444p10le seq.mov"
+    );
+    assert!(!text.contains("is odd"), "{text}");
+    if have_tool("ffmpeg") && have_tool("ffprobe") {
+        let made = std::process::Command::new("bash")
+            .args(["-c", &line.replacen("ffmpeg", "ffmpeg -v error", 1)])
+            .current_dir(&tmp)
+            .output()
+            .unwrap();
+        assert!(made.status.success(), "{line}: {}", stderr(&made));
+        let probe = std::process::Command::new("ffprobe")
+            .args([
+                "-v",
+                "error",
+                "-show_entries",
+                "stream=width,height,pix_fmt",
+                "seq.mov",
+            ])
+            .current_dir(&tmp)
+            .output()
+            .unwrap();
+        let info = String::from_utf8_lossy(&probe.stdout);
+        assert!(
+            info.contains("width=65") && info.contains("height=37"),
+            "{info}"
+        );
+        assert!(info.contains("pix_fmt=yuva444"), "{info}");
+    }
 }
 
 #[test]

@@ -326,7 +326,6 @@ fn video_notes(
         (Some((format, sixteen_bit)), _) => Some(Source::Stream {
             format,
             sixteen_bit,
-            alpha: seq.settings.alpha,
         }),
         (None, Some(pattern)) => Some(Source::Files {
             pattern,
@@ -338,9 +337,11 @@ fn video_notes(
     if print {
         let out = format!("{}.mp4", seq.name);
         let fps = seq.timeline.fps_text();
-        progress.command(&ffmpeg_command(source, w, h, &fps, &out));
+        let alpha = seq.settings.alpha;
+        progress.command(&ffmpeg_command(source, alpha, (w, h), &fps, &out));
     }
-    if w % 2 == 1 || h % 2 == 1 {
+    // ProRes 4444, which alpha frames go to, takes odd sizes.
+    if (w % 2 == 1 || h % 2 == 1) && !seq.settings.alpha {
         let text = format!(
             "note: {w}x{h} is odd, and yuv420p video needs even sizes: give ffmpeg -vf '{PAD}'"
         );

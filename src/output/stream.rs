@@ -31,8 +31,6 @@ pub enum Source<'a> {
     Stream {
         format: StreamFormat,
         sixteen_bit: bool,
-        /// RGBA frames: ProRes 4444 keeps their alpha, which H.264 cannot carry.
-        alpha: bool,
     },
     /// ffmpeg's image2 pattern (`frames/orbit/frame_%04d.png`) and the first frame number.
     Files { pattern: &'a str, first: u64 },
@@ -40,16 +38,23 @@ pub enum Source<'a> {
 
 /// The ffmpeg command that reads `source` (frames of `width`×`height` at `fps`, written as
 /// ffmpeg's `-r` takes it: `24`, `24000/1001`) and makes an H.264 video in yuv420p, which
-/// every player takes. Odd sizes get a pad filter, since yuv420p needs even ones. Every
-/// word is quoted for a POSIX shell where it needs it, so the line can be pasted as it is.
-pub fn ffmpeg_command(source: Source, width: u32, height: u32, fps: &str, out: &str) -> String {
+/// every player takes; odd sizes get a pad filter, since yuv420p needs even ones. Frames
+/// with `alpha` make ProRes 4444 instead (any size), which keeps the alpha H.264 cannot
+/// carry. Every word is quoted for a POSIX shell where it needs it, so the line can be
+/// pasted as it is.
+pub fn ffmpeg_command(
+    source: Source,
+    alpha: bool,
+    (width, height): (u32, u32),
+    fps: &str,
+    out: &str,
+) -> String {
     let mut words: Vec<String> = vec!["ffmpeg".into()];
     let mut add = |list: &[&str]| words.extend(list.iter().map(|w| w.to_string()));
     match source {
         Source::Stream {
             format: StreamFormat::Raw,
             sixteen_bit,
-            alpha,
         } => {
             add(&["-f", "rawvideo", "-pix_fmt", pix_fmt(sixteen_bit, alpha)]);
             add(&["-s", &format!("{width}x{height}"), "-r", fps, "-i", "-"]);
@@ -66,7 +71,7 @@ pub fn ffmpeg_command(source: Source, width: u32, height: u32, fps: &str, out: &
             add(&["-i", pattern]);
         }
     }
-    if let Source::Stream { alpha: true, .. } = source {
+    if alpha {
         let mov = format!("{}.mov", out.strip_suffix(".mp4").unwrap_or(out));
         add(&[
             "-c:v",
@@ -119,10 +124,9 @@ mod tests {
         let raw = Source::Stream {
             format: StreamFormat::Raw,
             sixteen_bit: false,
-            alpha: false,
         };
         assert_eq!(
-            ffmpeg_command(raw, 641, 361, "24", "out.mp4"),
+            ffmpeg_command(raw, false, (641, 361), "24", "out.mp4"),
             "ffmpeg -f rawvideo -pix_fmt rgb24 -s 641x361 -r 24 -i - -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' -c:v libx264 -pix_fmt yuv420p out.mp4"
         );
         let files = Source::Files {
@@ -130,8 +134,13 @@ mod tests {
             first: 1001,
         };
         assert_eq!(
-            ffmpeg_command(files, 640, 360, "24000/1001", "it's.mp4"),
+            ffmpeg_command(files, false, (640, 360), "24000/1001", "it's.mp4"),
             "ffmpeg -framerate 24000/1001 -start_number 1001 -i 'my frames/f_%04d.png' -c:v libx264 -pix_fmt yuv420p 'it'\\''s.mp4'"
+        );
+        // RGBA files keep their alpha in ProRes 4444, at any size.
+        assert_eq!(
+            ffmpeg_command(files, true, (641, 361), "24", "a.mp4"),
+            "ffmpeg -framerate 24 -start_number 1001 -i 'my frames/f_%04d.png' -c:v prores_ks -profile:v 4444 -pix_fmt yuva444p10le a.mov"
         );
     }
 }
