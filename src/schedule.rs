@@ -5,13 +5,13 @@
 //! does all I/O: atomic file writes as frames finish, the stream strictly in frame order.
 
 use crate::claim::{Attempt, Claims};
-use crate::exposure::Exposure;
 use crate::frame::Frame;
 use crate::output::{
     self, FileFormat, FrameMeta, fingerprint, pattern::Pattern, stream::StreamFormat,
 };
 use crate::progress::Progress;
 use crate::sequence::Sequence;
+use crate::shutter::Exposure;
 use crate::tracer::{self, Settings, World};
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -109,7 +109,7 @@ pub enum RunError {
     #[error("frame {frame}: {source}")]
     Camera {
         frame: u64,
-        source: crate::exposure::NoCamera,
+        source: crate::shutter::NoCamera,
     },
     #[error("{}: cannot encode: {message}", path.display())]
     Encode {

@@ -5,10 +5,10 @@
 //! directory need no common manifest.
 
 use crate::camera::{Camera, Pose};
-use crate::exposure::{Exposure, Shutter};
 use crate::output::FileFormat;
 use crate::output::exr::Precision;
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
+use crate::shutter::{Exposure, Shutter};
 use crate::timeline::Timeline;
 use crate::tracer::{Adaptive, Sampler, Settings};
 use crate::transfer::Encoding;

@@ -6,7 +6,7 @@ use super::{
     got, got_num, in_range, invalid, num, number, positive, raw, unit, vector,
 };
 use crate::camera::{Camera, Degenerate, Pose};
-use crate::exposure::{INSTANTS, Shutter};
+use crate::shutter::{INSTANTS, Shutter};
 use crate::timeline::{
     Clock, Ease, Interpolation, Key, Keyed, Orbit, Path as TimelinePath, Speed, Timeline, frames_to,
 };

@@ -4,12 +4,12 @@
 //! (sequences/bench/talk_orbit.yaml, also timed against POV-Ray when `povray` is installed),
 //! and fields of 4 to 100 000 spheres for the acceleration structure.
 
-use crate::exposure::Exposure;
 use crate::frame::Frame;
 use crate::output::{FileFormat, pattern::Pattern, png::Compression, stream::StreamFormat};
 use crate::progress::Progress;
 use crate::schedule::{self, Files, Job, Task};
 use crate::sequence::{self, Sequence};
+use crate::shutter::Exposure;
 use crate::tracer::{self, Kernel, World};
 use std::fmt::Write as _;
 use std::path::Path;

@@ -14,9 +14,9 @@ pub mod sample;
 pub mod shade;
 pub mod vec3;
 
-use crate::exposure::{Exposure, Shutter};
 use crate::frame::Frame;
 use crate::scene::Scene;
+use crate::shutter::{Exposure, Shutter};
 use crate::transfer::Encoding;
 pub use kernel::Kernel;
 use rayon::prelude::*;
@@ -47,7 +47,7 @@ pub struct Settings {
 }
 
 /// The derived form without `shutter`, whose effect shows in each frame's cameras (see
-/// `exposure`); the fingerprint does not use this text (see `output::fingerprint::Canon`).
+/// `shutter::Exposure`); the fingerprint does not use this text (see `output::fingerprint::Canon`).
 impl std::fmt::Debug for Settings {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         f.debug_struct("Settings")

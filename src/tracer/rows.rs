@@ -12,7 +12,7 @@ use super::shade::{self, Eye};
 use super::vec3::V3;
 use super::{Sampler, Samples, Settings, World, finite};
 use crate::camera::{Camera, screen_points};
-use crate::exposure::{Exposure, INSTANTS};
+use crate::shutter::{Exposure, INSTANTS};
 use glam::DVec3;
 use std::ops::{Add, Div, Mul};
 use std::sync::atomic::{AtomicBool, Ordering};
