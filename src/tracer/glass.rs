@@ -273,13 +273,9 @@ fn grow<V: Lanes>(next: &mut Vec<Branch<V>>, rays: Rays<V>, weight: V3<V>, activ
     if !active.any() {
         return;
     }
-    // (No closure here: lane operations in one would compile outside the kernel's features.)
-    let fits = match next.last() {
-        Some(last) => !last.active.and(active).any(),
-        None => false,
-    };
-    if fits {
-        let last = next.last_mut().expect("checked above");
+    if let Some(last) = next.last_mut()
+        && !last.active.and(active).any()
+    {
         last.rays = Rays {
             origin: V3::select(active, rays.origin, last.rays.origin),
             dir: V3::select(active, rays.dir, last.rays.dir),
