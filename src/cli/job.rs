@@ -116,6 +116,9 @@ fn apply(seq: &mut Sequence, o: &JobArgs) -> Result<(), Error> {
     if let Some(e) = o.encoding {
         seq.settings.encoding = e;
     }
+    if let Some(p) = o.precision {
+        seq.settings.precision = p;
+    }
     if let Some(e) = o.exposure {
         seq.settings.exposure =
             sequence::exposure(e).map_err(|m| Error::Usage(format!("--exposure: {m}")))?;

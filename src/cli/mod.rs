@@ -205,6 +205,10 @@ pub struct JobArgs {
     /// Coverage as alpha: RGBA PNGs and streams, an A channel in EXR (as render.alpha: true).
     #[arg(long)]
     pub alpha: bool,
+    /// Arithmetic of the tracer: f64, or f32 at about twice the speed (replaces
+    /// render.precision).
+    #[arg(long, value_enum)]
+    pub precision: Option<crate::tracer::Precision>,
 }
 
 /// `render`'s options; `status` takes them too and ignores those that only shape a run.

@@ -23,6 +23,7 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
             None => 0.0,
         },
         encoding: r.encoding.unwrap_or_default(),
+        precision: r.precision.unwrap_or_default(),
     };
     if r.quality.is_none() && r.samples.is_none() && r.adaptive.is_none() {
         default_sampling(&mut s);

@@ -44,6 +44,29 @@ pub struct Settings {
     pub encoding: Encoding,
     /// Motion blur: None when `render.shutter` is 0.
     pub shutter: Option<Shutter>,
+    /// The arithmetic of the lanes: f64 (the reference) or f32 (twice the lanes per
+    /// instruction, camera-relative coordinates).
+    pub precision: Precision,
+}
+
+/// The float type the tracer's lanes compute in (`render.precision`, `--precision`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Precision {
+    /// IEEE double precision: the reference every other setting is measured against.
+    #[default]
+    F64,
+    /// IEEE single precision, in coordinates relative to the frame's camera.
+    F32,
+}
+
+impl Precision {
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F64 => "f64",
+            Precision::F32 => "f32",
+        }
+    }
 }
 
 /// The derived form without `shutter`, whose effect shows in each frame's cameras (see
@@ -61,6 +84,7 @@ impl std::fmt::Debug for Settings {
             .field("alpha", &self.alpha)
             .field("exposure", &self.exposure)
             .field("encoding", &self.encoding)
+            .field("precision", &self.precision)
             .finish()
     }
 }
