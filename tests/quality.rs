@@ -8,7 +8,7 @@ use common::*;
 use rayreel::cli::{Cli, Command, job::Job};
 use rayreel::sequence::{self, Quality, Sequence};
 use rayreel::tools::measure::{self, compare};
-use rayreel::tracer::{Adaptive, Sampler, Settings};
+use rayreel::tracer::{Adaptive, Precision, Sampler, Settings};
 
 /// The orbit sequence as `rayreel render sequences/orbit.yaml ARGS` sees it.
 fn job(args: &[&str]) -> Sequence {
@@ -200,6 +200,16 @@ fn upscale(rgb: &[u8], hw: u32, w: u32, h: u32) -> Vec<u8> {
         }
     }
     out
+}
+
+#[test]
+fn the_reference_is_f64_whatever_the_file_says() {
+    let f32_file = job(&["--precision", "f32"]).settings;
+    assert_eq!(f32_file.precision, Precision::F32);
+    for trees in [false, true] {
+        let r = measure::reference_settings(&f32_file, trees);
+        assert_eq!(r.precision, Precision::F64);
+    }
 }
 
 #[test]

@@ -6,7 +6,7 @@
 use crate::frame::Frame;
 use crate::schedule::render_with;
 use crate::sequence::{Quality, Sequence, preset};
-use crate::tracer::{Adaptive, Sampler, Settings, World};
+use crate::tracer::{Adaptive, Precision, Sampler, Settings, World};
 use crate::transfer::Encoding;
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -20,6 +20,8 @@ pub const REFERENCE_DEPTH: u32 = 16;
 /// sample, so a 16×16 grid at depth 12 costs about what the plain reference does.
 pub const TREE_REFERENCE_SAMPLES: u32 = 256;
 pub const TREE_REFERENCE_DEPTH: u32 = 12;
+/// The reference is computed in f64 whatever the file says: it is what f32 is measured against.
+pub const REFERENCE_PRECISION: Precision = Precision::F64;
 
 /// How far an image is from the reference, in 8-bit levels.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,6 +99,7 @@ pub fn reference_settings(base: &Settings, trees: bool) -> Settings {
         sampler: Sampler::Stratified,
         depth: false,
         alpha: false,
+        precision: REFERENCE_PRECISION,
         ..*base
     }
 }
