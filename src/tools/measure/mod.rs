@@ -2,6 +2,8 @@
 //! user's own scene. A converged reference is rendered once; then a ladder of settings
 //! (uniform samples, adaptive thresholds, max_depth, the presets), each timed as the median of
 //! several runs and compared with the reference on the 8-bit image the user would get.
+//! Last, the file's own settings in f64 and in f32, rendered in turn, each also compared with
+//! the f64 image (the reference itself is always f64).
 
 use crate::frame::Frame;
 use crate::schedule::render_with;
@@ -24,6 +26,9 @@ pub const TREE_REFERENCE_SAMPLES: u32 = 256;
 pub const TREE_REFERENCE_DEPTH: u32 = 12;
 /// The reference is computed in f64 whatever the file says: it is what f32 is measured against.
 pub const REFERENCE_PRECISION: Precision = Precision::F64;
+/// Issue 19's target for f32: at most this share of pixels off by more than 2 levels from the
+/// f64 image of the same settings.
+pub const F32_TARGET_OFF2: f64 = 0.0005;
 
 /// How far an image is from the reference, in 8-bit levels.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,13 +38,15 @@ pub struct Error {
     pub max: u8,
     /// Share of pixels with some channel off by more than one level.
     pub off: f64,
+    /// Share of pixels with some channel off by more than two levels.
+    pub off2: f64,
 }
 
 pub fn compare(a: &[u8], b: &[u8]) -> Error {
     assert_eq!(a.len(), b.len(), "images of different sizes");
     let mut sum = 0.0;
     let mut max = 0u8;
-    let mut off = 0usize;
+    let (mut off, mut off2) = (0usize, 0usize);
     for (pa, pb) in a.chunks(3).zip(b.chunks(3)) {
         let mut worst = 0;
         for (x, y) in pa.iter().zip(pb) {
@@ -49,6 +56,7 @@ pub fn compare(a: &[u8], b: &[u8]) -> Error {
         }
         max = max.max(worst);
         off += usize::from(worst > 1);
+        off2 += usize::from(worst > 2);
     }
     let rmse = (sum / a.len() as f64).sqrt();
     let psnr = if rmse == 0.0 {
@@ -56,11 +64,13 @@ pub fn compare(a: &[u8], b: &[u8]) -> Error {
     } else {
         20.0 * (255.0 / rmse).log10()
     };
+    let pixels = (a.len() / 3) as f64;
     Error {
         rmse,
         psnr,
         max,
-        off: off as f64 / (a.len() / 3) as f64,
+        off: off as f64 / pixels,
+        off2: off2 as f64 / pixels,
     }
 }
 
@@ -74,6 +84,16 @@ pub struct Row {
     pub half: bool,
     pub samples_per_pixel: f64,
     pub seconds: [f64; 3],
+    pub error: Error,
+    /// Precision rows only: against the f64 render of the same settings.
+    pub versus_f64: Option<Versus>,
+}
+
+/// A precision row against the f64 row of the same settings (the f64 row against itself).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Versus {
+    /// The median over rounds of that round's f64 time over this row's time.
+    pub speedup: f64,
     pub error: Error,
 }
 
@@ -151,6 +171,57 @@ pub fn ladder(base: &Settings) -> Vec<(&'static str, String, Settings, bool)> {
         out.push(("preset", name.to_string(), s, q == Quality::Draft));
     }
     out
+}
+
+/// The file's own settings in f64 and in f32 (both, whatever the file says), f64 first.
+pub fn precisions(base: &Settings) -> [(String, Settings); 2] {
+    [Precision::F64, Precision::F32].map(|precision| {
+        let s = Settings {
+            precision,
+            depth: false,
+            alpha: false,
+            ..*base
+        };
+        (format!("precision {}", precision.name()), s)
+    })
+}
+
+/// The precision rows: rendered in turn, round by round, so a busy moment slows both alike.
+fn precision_rows(
+    world: &World,
+    seq: &Sequence,
+    n: u64,
+    runs: usize,
+    ref_image: &[u8],
+) -> Result<Vec<Row>, String> {
+    let pair = precisions(&seq.settings);
+    let mut times = [Vec::new(), Vec::new()];
+    let mut out = [(Vec::new(), 0.0), (Vec::new(), 0.0)];
+    for _ in 0..runs {
+        for (i, (_, s)) in pair.iter().enumerate() {
+            let (image, spp, t) = timed(world, seq, n, s, false, 1)?;
+            times[i].extend(t);
+            out[i] = (image, spp);
+        }
+    }
+    let rows = pair.into_iter().enumerate().map(|(i, (label, settings))| {
+        let ratios = (0..runs).map(|r| times[0][r] / times[i][r]).collect();
+        let versus = Versus {
+            speedup: spread(ratios)[0],
+            error: compare(&out[i].0, &out[0].0),
+        };
+        Row {
+            group: "precision",
+            label,
+            settings,
+            half: false,
+            samples_per_pixel: out[i].1,
+            seconds: spread(times[i].clone()),
+            error: compare(&out[i].0, ref_image),
+            versus_f64: Some(versus),
+        }
+    });
+    Ok(rows.collect())
 }
 
 /// Times `runs` renders; returns the 8-bit image of the last, samples per pixel and times.
@@ -249,7 +320,16 @@ pub fn measure(
             samples_per_pixel: spp,
             seconds: spread(times),
             error,
+            versus_f64: None,
         });
+    }
+    for row in precision_rows(&world, seq, n, runs, &ref_image)? {
+        let e = row.versus_f64.expect("a precision row").error;
+        progress(&format!(
+            "{}: rmse {:.3}, against f64 rmse {:.3}",
+            row.label, row.error.rmse, e.rmse
+        ));
+        rows.push(row);
     }
     Ok(Report {
         encoding: seq.settings.encoding,

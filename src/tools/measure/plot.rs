@@ -4,7 +4,8 @@ use super::Report;
 use std::fmt::Write as _;
 
 impl Report {
-    /// Error against time, log-log, uniform and adaptive as lines, presets labelled.
+    /// Error against time, log-log, uniform and adaptive as lines, presets labelled, the
+    /// precision rows as two diamonds.
     pub fn svg(&self) -> String {
         let (w, h, m) = (720.0, 460.0, 60.0);
         let pts: Vec<(f64, f64)> = self
@@ -100,11 +101,13 @@ impl Report {
                 r.label
             );
         }
+        self.precision_marks(&mut s, &px, &py);
         let legend = [
             ("#1f77b4", "uniform 1-256 spp"),
             ("#2ca02c", "adaptive 4-64"),
             ("#9467bd", "max_depth 1-8 @16 spp"),
             ("#d62728", "presets"),
+            (PRECISION_COLOR, "file's settings f64, f32"),
         ];
         for (i, (color, text)) in legend.iter().enumerate() {
             let y = m + 16.0 + 16.0 * i as f64;
@@ -120,7 +123,47 @@ impl Report {
         s.push_str("</svg>\n");
         s
     }
+
+    /// The precision rows as labelled diamonds joined by a dashed line (f64 to f32).
+    fn precision_marks(&self, s: &mut String, px: &dyn Fn(f64) -> f64, py: &dyn Fn(f64) -> f64) {
+        let marks: Vec<(f64, f64, &str)> = self
+            .rows
+            .iter()
+            .filter(|r| r.group == "precision")
+            .map(|r| {
+                let (x, y) = (px(r.seconds[0]), py(r.error.rmse.max(1e-3)));
+                (x, y, r.settings.precision.name())
+            })
+            .collect();
+        let line: Vec<String> = marks
+            .iter()
+            .map(|(x, y, _)| format!("{x:.1},{y:.1}"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "<polyline points=\"{}\" fill=\"none\" stroke=\"{PRECISION_COLOR}\" stroke-width=\"1.5\" stroke-dasharray=\"4 3\"/>",
+            line.join(" ")
+        );
+        for (x, y, name) in marks {
+            let _ = writeln!(
+                s,
+                "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"8\" height=\"8\" fill=\"{PRECISION_COLOR}\" transform=\"rotate(45 {x:.1} {y:.1})\"/>",
+                x - 4.0,
+                y - 4.0
+            );
+            let _ = writeln!(
+                s,
+                "<text x=\"{:.1}\" y=\"{:.1}\" fill=\"{PRECISION_COLOR}\">{name}</text>",
+                x + 8.0,
+                // f64 above, f32 below: the two points are often close.
+                if name == "f64" { y - 6.0 } else { y + 14.0 }
+            );
+        }
+    }
 }
+
+/// The colour of the precision rows in the plot.
+const PRECISION_COLOR: &str = "#ff7f0e";
 
 /// Log10 bounds with a little room.
 fn bounds(values: impl Iterator<Item = f64>) -> (f64, f64) {

@@ -1,7 +1,8 @@
 //! The measurement as text: the table on stdout, `measure.csv` and `measure.json` (one row
 //! per setting, the same columns in both).
 
-use super::Report;
+use super::{F32_TARGET_OFF2, REFERENCE_PRECISION, Report, Row, Versus};
+use crate::tracer::Precision;
 use std::fmt::Write as _;
 
 impl Report {
@@ -10,6 +11,9 @@ impl Report {
             "errors on the 8-bit {} values of each frame (render.encoding)\n",
             self.encoding.name()
         );
+        if self.rows.first().map(|r| r.settings.precision) == Some(Precision::F32) {
+            s += "the ladder in f32 (render.precision); the reference in f64\n";
+        }
         let _ = writeln!(
             s,
             "{:<24} {:>9} {:>9} {:>9} {:>8} {:>8} {:>7} {:>4} {:>7}",
@@ -28,6 +32,50 @@ impl Report {
                 r.error.max,
                 "",
                 100.0 * r.error.off
+            );
+        }
+        s + &self.precision_table()
+    }
+
+    /// The precision rows against the f64 row, with issue 19's target for f32.
+    fn precision_table(&self) -> String {
+        let rows: Vec<(&Row, Versus)> = self
+            .rows
+            .iter()
+            .filter_map(|r| Some((r, r.versus_f64?)))
+            .collect();
+        let mut s = String::from(
+            "\nthe file's settings in f64 and f32, rendered in turn; against the f64 image\n",
+        );
+        let _ = writeln!(
+            s,
+            "{:<24} {:>9} {:>8} {:>8} {:>7} {:>8} {:>8}",
+            "settings", "speed-up", "rmse", "psnr dB", "max", ">1/255", ">2/255"
+        );
+        for (r, v) in &rows {
+            let _ = writeln!(
+                s,
+                "{:<24} {:>8.2}x {:>8.3} {:>8.2} {:>7} {:>7.3}% {:>7.3}%",
+                r.label,
+                v.speedup,
+                v.error.rmse,
+                v.error.psnr,
+                v.error.max,
+                100.0 * v.error.off,
+                100.0 * v.error.off2
+            );
+        }
+        let f32_row = rows
+            .iter()
+            .find(|(r, _)| r.settings.precision == Precision::F32);
+        if let Some((_, v)) = f32_row {
+            let met = v.error.off2 <= F32_TARGET_OFF2;
+            let _ = writeln!(
+                s,
+                "target: f32 at most {}% of pixels off by more than 2/255: {} ({:.3}%)",
+                100.0 * F32_TARGET_OFF2,
+                if met { "met" } else { "NOT met" },
+                100.0 * v.error.off2
             );
         }
         s
@@ -54,8 +102,15 @@ impl Report {
                     ("psnr_db", format!("{:.3}", finite_or(r.error.psnr, 999.0))),
                     ("max_error", r.error.max.to_string()),
                     ("share_off", format!("{:.6}", r.error.off)),
-                    ("encoding", format!("\"{}\"", self.encoding.name())),
+                    ("share_off_2", format!("{:.6}", r.error.off2)),
                 ]
+                .into_iter()
+                .chain(versus_record(r.versus_f64))
+                .chain([
+                    ("precision", format!("\"{}\"", r.settings.precision.name())),
+                    ("encoding", format!("\"{}\"", self.encoding.name())),
+                ])
+                .collect()
             })
             .collect()
     }
@@ -67,7 +122,13 @@ impl Report {
             .map_or(Vec::new(), |r| r.iter().map(|(k, _)| *k).collect());
         let mut s = header.join(",") + "\n";
         for r in &records {
-            let cells: Vec<&str> = r.iter().map(|(_, v)| v.trim_matches('"')).collect();
+            let cells: Vec<&str> = r
+                .iter()
+                .map(|(_, v)| match v.as_str() {
+                    "null" => "",
+                    v => v.trim_matches('"'),
+                })
+                .collect();
             s += &(cells.join(",") + "\n");
         }
         s
@@ -83,14 +144,40 @@ impl Report {
             })
             .collect();
         format!(
-            "{{\n  \"reference\": {{\"samples_per_pixel\": {}, \"max_depth\": {}, \"seconds\": {:.6}, \"half_samples_rmse\": {:.5}}},\n  \"rows\": [\n{}\n  ]\n}}\n",
+            "{{\n  \"reference\": {{\"samples_per_pixel\": {}, \"max_depth\": {}, \"precision\": \"{}\", \"seconds\": {:.6}, \"half_samples_rmse\": {:.5}}},\n  \"rows\": [\n{}\n  ]\n}}\n",
             self.reference.0,
             self.reference.1,
+            REFERENCE_PRECISION.name(),
             self.reference_seconds,
             self.convergence.rmse,
             rows.join(",\n")
         )
     }
+}
+
+/// The columns against the f64 image of the same settings: `null` (empty in the CSV) outside
+/// the precision rows.
+fn versus_record(v: Option<Versus>) -> Vec<(&'static str, String)> {
+    let cells = v.map(|v| {
+        [
+            format!("{:.3}", v.speedup),
+            format!("{:.5}", v.error.rmse),
+            format!("{:.3}", finite_or(v.error.psnr, 999.0)),
+            v.error.max.to_string(),
+            format!("{:.6}", v.error.off),
+            format!("{:.6}", v.error.off2),
+        ]
+    });
+    let names = [
+        "speedup_vs_f64",
+        "rmse_vs_f64",
+        "psnr_db_vs_f64",
+        "max_error_vs_f64",
+        "share_off_vs_f64",
+        "share_off_2_vs_f64",
+    ];
+    let cells = cells.unwrap_or_else(|| ["null"; 6].map(String::from));
+    names.into_iter().zip(cells).collect()
 }
 
 fn finite_or(v: f64, fallback: f64) -> f64 {
