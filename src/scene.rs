@@ -101,3 +101,74 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub background: DVec3,
 }
+
+impl Scene {
+    /// The scene in coordinates whose origin is `by` (f32 traces relative to the camera):
+    /// positions move by −`by` in f64, and a plane is anchored at its point nearest the new
+    /// origin. Directions, colours and radii stay as they are.
+    pub fn shifted(&self, by: DVec3) -> Scene {
+        let objects = self
+            .objects
+            .iter()
+            .map(|o| Object {
+                shape: o.shape.shifted(by),
+                ..*o
+            })
+            .collect();
+        let lights = self.lights.iter().map(|l| l.shifted(by)).collect();
+        Scene {
+            objects,
+            lights,
+            ..self.clone()
+        }
+    }
+}
+
+impl Shape {
+    pub fn shifted(self, by: DVec3) -> Shape {
+        match self {
+            Shape::Sphere { center, radius } => Shape::Sphere {
+                center: center - by,
+                radius,
+            },
+            Shape::Plane { point, normal } => Shape::Plane {
+                point: closest_to_origin(point - by, normal),
+                normal,
+            },
+        }
+    }
+}
+
+impl Light {
+    fn shifted(self, by: DVec3) -> Light {
+        match self {
+            Light::Point {
+                position,
+                intensity,
+            } => Light::Point {
+                position: position - by,
+                intensity,
+            },
+            Light::Spot {
+                position,
+                axis,
+                cos_inner,
+                cos_outer,
+                intensity,
+            } => Light::Spot {
+                position: position - by,
+                axis,
+                cos_inner,
+                cos_outer,
+                intensity,
+            },
+            other => other,
+        }
+    }
+}
+
+/// The point of the plane through `point` with unit `normal` nearest the origin, n·(p·n): the
+/// one whose coordinates are smallest, so rounding them costs the least.
+pub fn closest_to_origin(point: DVec3, normal: DVec3) -> DVec3 {
+    normal * point.dot(normal)
+}

@@ -13,6 +13,7 @@
 
 use crate::camera::{Camera, Degenerate};
 use crate::timeline::Timeline;
+use glam::DVec3;
 
 /// Instants an open interval is divided into. With 256, the ghosts of a streak up to 256
 /// pixels long stay within a pixel of each other: a continuous blur.
@@ -64,6 +65,18 @@ impl std::fmt::Display for NoCamera {
 }
 
 impl Exposure {
+    /// These cameras in coordinates whose origin is `by`.
+    pub fn shifted(&self, by: DVec3) -> Exposure {
+        let shift = |c: &Camera| Camera {
+            origin: c.origin - by,
+            ..*c
+        };
+        Exposure {
+            camera: shift(&self.camera),
+            instants: self.instants.iter().map(shift).collect(),
+        }
+    }
+
     /// One camera for the whole frame.
     pub fn still(camera: Camera) -> Exposure {
         Exposure {

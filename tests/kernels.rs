@@ -1,7 +1,7 @@
 //! Every lane width against the scalar kernel, bit for bit: random rays (from outside, starting
 //! on surfaces, inside spheres, grazing spheres, parallel to planes) through random scenes with
 //! every light kind, and whole frames from the binary with the widest kernel and with
-//! `RAYREEL_KERNEL=scalar`.
+//! `RAYREEL_KERNEL=scalar`, in f64 and in f32.
 
 mod common;
 
@@ -10,7 +10,7 @@ use glam::DVec3;
 use rayreel::scene::Shape;
 use rayreel::sequence;
 use rayreel::tracer::intersect::Ray;
-use rayreel::tracer::{Kernel, World};
+use rayreel::tracer::{Kernel, Precision, World};
 use std::path::Path;
 
 /// A small deterministic generator (xorshift64*), so failures reproduce.
@@ -217,26 +217,36 @@ fn every_width_traces_every_ray_as_the_scalar_kernel_does() {
         let world = World::new(seq.scene.clone());
         // Not a multiple of any width, so the last packet has idle lanes.
         let rays = rays(&mut rng, &world, 1003);
-        for depth in [1, 3, 6] {
-            let (want, cast) = Kernel::Scalar.trace(&world, &rays, depth);
+        for (depth, p) in [1, 3, 6]
+            .into_iter()
+            .flat_map(|d| PRECISIONS.map(|p| (d, p)))
+        {
+            let (want, cast) = Kernel::Scalar.trace(p, &world, &rays, depth);
             for &k in &wide {
-                let (got, got_cast) = k.trace(&world, &rays, depth);
+                let (got, got_cast) = k.trace(p, &world, &rays, depth);
+                let name = format!("case {case} depth {depth} {} {}", k.name(), p.name());
                 for (i, (a, b)) in want.iter().zip(&got).enumerate() {
-                    assert!(
-                        same(*a, *b),
-                        "case {case} depth {depth} {}: ray {i} {:?}: {a} vs {b}",
-                        k.name(),
-                        rays[i]
-                    );
+                    assert!(same(*a, *b), "{name}: ray {i} {:?}: {a} vs {b}", rays[i]);
                 }
-                assert_eq!(cast, got_cast, "case {case} depth {depth} {}", k.name());
+                assert_eq!(cast, got_cast, "{name}");
             }
         }
     }
 }
 
-/// Renders `args` with every kernel this CPU has; every output must equal the scalar one.
+const PRECISIONS: [Precision; 2] = [Precision::F64, Precision::F32];
+
+/// Renders `args` with every kernel this CPU has, in f64 and in f32; every output must equal
+/// the scalar one of its precision.
 fn every_kernel_equals_scalar(dir: &Path, name: &str, args: &[&str]) {
+    for p in PRECISIONS {
+        let name = format!("{name}-{}", p.name());
+        let args = [args, &["--precision", p.name()]].concat();
+        kernels_agree(dir, &name, &args);
+    }
+}
+
+fn kernels_agree(dir: &Path, name: &str, args: &[&str]) {
     let mut outputs = Vec::new();
     for kernel in Kernel::ALL
         .iter()

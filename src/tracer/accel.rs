@@ -12,7 +12,7 @@
 use super::intersect::{Hit, Ray, plane_hit, sphere_hit};
 use super::lanes::{F64x1, Lanes, Mask};
 use super::vec3::V3;
-use crate::scene::{Object, Shape};
+use crate::scene::{Object, Shape, closest_to_origin};
 use glam::DVec3;
 use std::ops::Range;
 
@@ -119,6 +119,46 @@ impl Geometry {
             let n = spheres.len();
             build(&mut bvh, &mut spheres, 0, 0, n);
         }
+        Geometry {
+            spheres,
+            planes,
+            bvh,
+        }
+    }
+
+    /// This geometry moved by −`by` (camera-relative coordinates for f32), each box widened
+    /// by `pad` times its largest coordinate and extent (boxes that stay conservative once
+    /// rounded to f32). The hierarchy keeps its shape: translation changes no split.
+    pub fn shifted(&self, by: DVec3, pad: f64) -> Geometry {
+        let spheres = self
+            .spheres
+            .iter()
+            .map(|b| Ball {
+                center: b.center - by,
+                ..*b
+            })
+            .collect();
+        let planes = self
+            .planes
+            .iter()
+            .map(|p| Flat {
+                point: closest_to_origin(p.point - by, p.normal),
+                ..*p
+            })
+            .collect();
+        let bvh = self
+            .bvh
+            .iter()
+            .map(|n| {
+                let (min, max) = (n.min - by, n.max - by);
+                let reach = min.abs().max(max.abs()).max_element() + (max - min).max_element();
+                Node {
+                    min: min - pad * reach,
+                    max: max + pad * reach,
+                    ..*n
+                }
+            })
+            .collect();
         Geometry {
             spheres,
             planes,
@@ -447,7 +487,14 @@ impl<V: Lanes> Slabs<V> {
         );
         let near = x0.max(y0).max(z0).max(V::splat(0.0));
         let far = x1.min(y1).min(z1).min(limit);
-        near.le(far)
+        if V::BOX_SLACK == 0.0 {
+            return near.le(far);
+        }
+        // f32: the entry and the sphere's own t each carry a few ulps of the distance they
+        // measure; widening the interval by 2^-16 of it (hundreds of ulps) keeps the test
+        // conservative, so the hierarchy still never changes which sphere is nearest.
+        let (less, more) = (V::splat(1.0 - V::BOX_SLACK), V::splat(1.0 + V::BOX_SLACK));
+        (near * less).le(far * more)
     }
 }
 
@@ -477,12 +524,14 @@ fn slab<V: Lanes>(lo: f64, hi: f64, origin: V, inv: V, backwards: Option<bool>) 
     }
 }
 
-/// 1/d for the slab test. A zero component would make 0 · ∞ = NaN at a box face; a tiny one
-/// keeps every slab finite and the test conservative.
+/// 1/d for the slab test. A zero component would make 0 · ∞ = NaN at a box face, and so
+/// would one whose reciprocal overflows; `TINY` in their place keeps every slab finite and the
+/// test conservative.
 #[inline(always)]
 fn inverse<V: Lanes>(d: V) -> V {
-    let zero = d.eq(V::splat(0.0));
-    V::splat(1.0) / V::select(zero, V::splat(1e-300).copysign(d), d)
+    let tiny = V::splat(V::TINY);
+    let small = d.lt(tiny).and((-tiny).lt(d));
+    V::splat(1.0) / V::select(small, tiny.copysign(d), d)
 }
 
 fn bounds(b: &Ball) -> (DVec3, DVec3) {

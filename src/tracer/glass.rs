@@ -10,7 +10,7 @@
 use super::World;
 use super::accel::Rays;
 use super::intersect::{plane_hit, sphere_hit};
-use super::lanes::{F64x1, Lanes, Mask};
+use super::lanes::{F64x1, Lanes, MAX_LANES, Mask};
 use super::shade::{Eye, NEGLIGIBLE_WEIGHT, Shaded, powi, shade_hit};
 use super::vec3::V3;
 use crate::scene::{Material, Object, Shape};
@@ -206,7 +206,7 @@ pub(super) fn trace_tree<V: Lanes>(
     let background = V3::splat(world.scene.background);
     let budget = tree_budget(max_depth);
     let mut covered = V::M::none_set();
-    let mut spent = [0u32; 16];
+    let mut spent = [0u32; MAX_LANES];
     let mut color = V3::zero();
     let mut level = vec![Branch {
         rays: eye.rays,
@@ -294,7 +294,7 @@ fn grow<V: Lanes>(next: &mut Vec<Branch<V>>, rays: Rays<V>, weight: V3<V>, activ
 
 /// The lanes of `active` that may trace one more ray, charging it to them.
 #[inline(always)]
-fn afford<M: Mask>(active: M, spent: &mut [u32; 16], budget: u32) -> M {
+fn afford<M: Mask>(active: M, spent: &mut [u32; MAX_LANES], budget: u32) -> M {
     let mut bits = 0;
     for (k, s) in spent.iter_mut().enumerate() {
         if active.lane(k) && *s < budget {

@@ -5,9 +5,10 @@
 //! runs on any x86-64 and builds elsewhere. The widest the CPU has is used unless `RAYREEL_KERNEL=scalar|avx2|avx512`
 //! asks for another (tests and `rayreel bench` compare them); every width gives the same bytes.
 
-use super::World;
 use super::intersect::Ray;
-use super::rows::{self, Old, Pass, RowOut};
+use super::lanes::Lanes;
+use super::rows::{self, Old, Pass, RowOut, RowStats};
+use super::{Precision, World};
 use glam::DVec3;
 use std::sync::OnceLock;
 
@@ -29,15 +30,6 @@ impl Kernel {
             Kernel::Scalar => "scalar",
             Kernel::Avx2 => "avx2",
             Kernel::Avx512 => "avx512",
-        }
-    }
-
-    /// Rays per packet.
-    pub fn lanes(self) -> usize {
-        match self {
-            Kernel::Scalar => 1,
-            Kernel::Avx2 => 8,
-            Kernel::Avx512 => 16,
         }
     }
 
@@ -75,40 +67,43 @@ impl Kernel {
             .unwrap_or(Kernel::Scalar)
     }
 
+    /// Rays per packet in `precision`: f64 packets are two registers of 4 (AVX2) or 8
+    /// (AVX-512) lanes; f32 packets two registers of 8 (AVX2) or one of 16 (AVX-512).
+    pub fn lanes_in(self, precision: Precision) -> usize {
+        match (self, precision) {
+            (Kernel::Scalar, _) => 1,
+            (Kernel::Avx2, Precision::F64) => 8,
+            (Kernel::Avx512, Precision::F32) => 32,
+            _ => 16,
+        }
+    }
+
     /// Traces arbitrary rays through at most `max_depth` surfaces each, in packets of this
-    /// kernel's width: their colours, and the rays cast (eye, reflection and shadow rays).
-    /// Tests compare every width with the scalar kernel through this, lane by lane.
-    pub fn trace(self, world: &World, rays: &[Ray], max_depth: u32) -> (Vec<DVec3>, u64) {
+    /// kernel's width and `precision`: their colours, and the rays cast (eye, reflection and
+    /// shadow rays). Tests compare every width with the scalar kernel through this, lane by lane.
+    pub fn trace(
+        self,
+        precision: Precision,
+        world: &World,
+        rays: &[Ray],
+        max_depth: u32,
+    ) -> (Vec<DVec3>, u64) {
         let mut out = vec![DVec3::ZERO; rays.len()];
-        let cast = match self {
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 if self.supported() => unsafe {
-                x86::rays_avx2(world, rays, max_depth, &mut out)
-            },
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 if self.supported() => unsafe {
-                x86::rays_avx512(world, rays, max_depth, &mut out)
-            },
-            _ => rows::rays::<super::lanes::F64x1>(world, rays, max_depth, &mut out),
+        let cast = match self.run(precision, Job::Rays(world, rays, max_depth, &mut out)) {
+            Done::Cast(n) => n,
+            _ => unreachable!("a Rays job counts rays"),
         };
         (out, cast)
     }
 
     /// Rows a band of one pass holds: the height of this kernel's tiles.
-    pub(super) fn band_rows(self) -> usize {
-        rows::tile_rows(self.lanes())
+    pub(super) fn band_rows(self, precision: Precision) -> usize {
+        rows::tile_rows(self.lanes_in(precision))
     }
 
     /// Runs one pass over the band of rows starting at `top` with this kernel.
-    pub(super) fn band(self, pass: &Pass, top: u32, out: RowOut) -> rows::RowStats {
-        match self {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: a kernel is only chosen when `supported` said the CPU has the feature.
-            Kernel::Avx2 if self.supported() => unsafe { x86::band_avx2(pass, top, out) },
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 if self.supported() => unsafe { x86::band_avx512(pass, top, out) },
-            _ => rows::band::<super::lanes::F64x1>(pass, top, out),
-        }
+    pub(super) fn band(self, pass: &Pass, top: u32, out: RowOut) -> RowStats {
+        self.stats(pass, Job::Band(pass, top, out))
     }
 
     /// Adds samples to the `pixels` of a frame whose means are `old`; new means into `out`.
@@ -118,99 +113,95 @@ impl Kernel {
         pixels: &[u32],
         old: Old,
         out: &mut [[f32; 4]],
-    ) -> rows::RowStats {
-        match self {
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 if self.supported() => unsafe { x86::marked_avx2(pass, pixels, old, out) },
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 if self.supported() => unsafe {
-                x86::marked_avx512(pass, pixels, old, out)
-            },
-            _ => rows::marked::<super::lanes::F64x1>(pass, pixels, old, out),
-        }
+    ) -> RowStats {
+        self.stats(pass, Job::Marked(pass, pixels, old, out))
     }
 
     /// Distance to the first hit of each pixel centre's eye ray in one row.
     pub(super) fn depth_row(self, pass: &Pass, row: u32, out: &mut [f32]) {
+        self.run(pass.settings.precision, Job::Depth(pass, row, out));
+    }
+
+    fn stats(self, pass: &Pass, job: Job) -> RowStats {
+        match self.run(pass.settings.precision, job) {
+            Done::Stats(s) => s,
+            _ => unreachable!("a pass job returns its statistics"),
+        }
+    }
+
+    /// Runs `job` with this kernel's lanes in `precision`. A kernel the CPU lacks (only
+    /// possible through `trace` or `render_with`) runs as the scalar one, with the same result.
+    fn run(self, precision: Precision, job: Job) -> Done {
+        use super::lanes::{F32x1, F64x1};
+        #[cfg(target_arch = "x86_64")]
+        if self.supported() {
+            use super::lanes::Pair;
+            use super::lanes::x86::{F32x8, F32x16, F64x4, F64x8};
+            // SAFETY: `supported` said the CPU has the feature the entry point enables.
+            match (self, precision) {
+                (Kernel::Avx2, Precision::F64) => return unsafe { x86::avx2::<Pair<F64x4>>(job) },
+                (Kernel::Avx2, Precision::F32) => return unsafe { x86::avx2::<Pair<F32x8>>(job) },
+                (Kernel::Avx512, Precision::F64) => {
+                    return unsafe { x86::avx512::<Pair<F64x8>>(job) };
+                }
+                (Kernel::Avx512, Precision::F32) => {
+                    return unsafe { x86::avx512::<Pair<F32x16>>(job) };
+                }
+                (Kernel::Scalar, _) => {}
+            }
+        }
+        match precision {
+            Precision::F64 => job.run::<F64x1>(),
+            Precision::F32 => job.run::<F32x1>(),
+        }
+    }
+}
+
+/// One call into the generic kernel code, so that each CPU feature needs one entry point.
+enum Job<'a, 'b> {
+    Band(&'a Pass<'b>, u32, RowOut<'a>),
+    Marked(&'a Pass<'b>, &'a [u32], Old<'a>, &'a mut [[f32; 4]]),
+    Depth(&'a Pass<'b>, u32, &'a mut [f32]),
+    Rays(&'a World, &'a [Ray], u32, &'a mut [DVec3]),
+}
+
+enum Done {
+    Stats(RowStats),
+    Cast(u64),
+    Nothing,
+}
+
+impl Job<'_, '_> {
+    #[inline(always)]
+    fn run<V: Lanes>(self) -> Done {
         match self {
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 if self.supported() => unsafe { x86::depth_avx2(pass, row, out) },
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 if self.supported() => unsafe { x86::depth_avx512(pass, row, out) },
-            _ => rows::depth::<super::lanes::F64x1>(pass, row, out),
+            Job::Band(pass, top, out) => Done::Stats(rows::band::<V>(pass, top, out)),
+            Job::Marked(pass, pixels, old, out) => {
+                Done::Stats(rows::marked::<V>(pass, pixels, old, out))
+            }
+            Job::Depth(pass, row, out) => {
+                rows::depth::<V>(pass, row, out);
+                Done::Nothing
+            }
+            Job::Rays(world, rays, depth, out) => {
+                Done::Cast(rows::rays::<V>(world, rays, depth, out))
+            }
         }
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use super::super::lanes::Pair;
-    use super::super::lanes::x86::{F64x4, F64x8};
-    use super::rows::{self, Old, Pass, RowOut, RowStats};
-    use crate::tracer::World;
-    use crate::tracer::intersect::Ray;
-    use glam::DVec3;
-
-    type Avx2Packet = Pair<F64x4>;
-    type Avx512Packet = Pair<F64x8>;
+    use super::{Done, Job};
+    use crate::tracer::lanes::Lanes;
 
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn band_avx2(pass: &Pass, top: u32, out: RowOut) -> RowStats {
-        rows::band::<Avx2Packet>(pass, top, out)
+    pub(super) unsafe fn avx2<V: Lanes>(job: Job) -> Done {
+        job.run::<V>()
     }
 
     #[target_feature(enable = "avx512f")]
-    pub(super) unsafe fn band_avx512(pass: &Pass, top: u32, out: RowOut) -> RowStats {
-        rows::band::<Avx512Packet>(pass, top, out)
-    }
-
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn marked_avx2(
-        pass: &Pass,
-        pixels: &[u32],
-        old: Old,
-        out: &mut [[f32; 4]],
-    ) -> RowStats {
-        rows::marked::<Avx2Packet>(pass, pixels, old, out)
-    }
-
-    #[target_feature(enable = "avx512f")]
-    pub(super) unsafe fn marked_avx512(
-        pass: &Pass,
-        pixels: &[u32],
-        old: Old,
-        out: &mut [[f32; 4]],
-    ) -> RowStats {
-        rows::marked::<Avx512Packet>(pass, pixels, old, out)
-    }
-
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn rays_avx2(
-        world: &World,
-        rays: &[Ray],
-        depth: u32,
-        out: &mut [DVec3],
-    ) -> u64 {
-        rows::rays::<Avx2Packet>(world, rays, depth, out)
-    }
-
-    #[target_feature(enable = "avx512f")]
-    pub(super) unsafe fn rays_avx512(
-        world: &World,
-        rays: &[Ray],
-        depth: u32,
-        out: &mut [DVec3],
-    ) -> u64 {
-        rows::rays::<Avx512Packet>(world, rays, depth, out)
-    }
-
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn depth_avx2(pass: &Pass, row: u32, out: &mut [f32]) {
-        rows::depth::<Avx2Packet>(pass, row, out)
-    }
-
-    #[target_feature(enable = "avx512f")]
-    pub(super) unsafe fn depth_avx512(pass: &Pass, row: u32, out: &mut [f32]) {
-        rows::depth::<Avx512Packet>(pass, row, out)
+    pub(super) unsafe fn avx512<V: Lanes>(job: Job) -> Done {
+        job.run::<V>()
     }
 }

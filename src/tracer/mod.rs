@@ -18,6 +18,7 @@ use crate::frame::Frame;
 use crate::scene::Scene;
 use crate::shutter::{Exposure, Shutter};
 use crate::transfer::Encoding;
+use glam::DVec3;
 pub use kernel::Kernel;
 use rayon::prelude::*;
 use rows::{Pass, Planes, RowOut, RowStats};
@@ -123,19 +124,31 @@ impl World {
     pub fn new(scene: Scene) -> World {
         let geometry = accel::Geometry::new(&scene.objects);
         let material = |i: usize| &scene.materials[scene.objects[i].material];
-        let clear: Vec<glass::Clear> = (0..scene.objects.len())
-            .filter(|&i| material(i).transparent())
-            .map(|i| glass::Clear::new(&scene.objects[i], i, material(i).transmission))
-            .collect();
-        let opaque = (!clear.is_empty())
+        let opaque = scene
+            .objects
+            .iter()
+            .any(|o| scene.materials[o.material].transparent())
             .then(|| accel::Geometry::subset(&scene.objects, |i| !material(i).transparent()));
-        let branches = scene.materials.iter().any(|m| m.branches());
         World {
+            clear: clear(&scene),
+            branches: scene.materials.iter().any(|m| m.branches()),
             scene,
             geometry,
             opaque,
-            clear,
-            branches,
+        }
+    }
+
+    /// This world in coordinates whose origin is `by` (see `Scene::shifted`), its boxes
+    /// widened for f32 by 2^-16 of their reach (see `Geometry::shifted`).
+    pub fn shifted(&self, by: DVec3) -> World {
+        const PAD: f64 = 1.0 / 65536.0;
+        let scene = self.scene.shifted(by);
+        World {
+            clear: clear(&scene),
+            scene,
+            geometry: self.geometry.shifted(by, PAD),
+            opaque: self.opaque.as_ref().map(|g| g.shifted(by, PAD)),
+            branches: self.branches,
         }
     }
 
@@ -148,6 +161,15 @@ impl World {
     fn blockers(&self) -> &accel::Geometry {
         self.opaque.as_ref().unwrap_or(&self.geometry)
     }
+}
+
+/// The objects of `scene` that let light through, in file order.
+fn clear(scene: &Scene) -> Vec<glass::Clear> {
+    let material = |i: usize| &scene.materials[scene.objects[i].material];
+    (0..scene.objects.len())
+        .filter(|&i| material(i).transparent())
+        .map(|i| glass::Clear::new(&scene.objects[i], i, material(i).transmission))
+        .collect()
 }
 
 /// Frame number `frame` of `world` seen with `exposure`'s cameras.
@@ -187,6 +209,17 @@ fn render_frame(
     frame: u64,
     stop: &AtomicBool,
 ) -> Option<Frame> {
+    // f32 traces in coordinates relative to the frame's camera, shifted in f64: positions
+    // near the camera keep their precision however far from the origin the scene lies.
+    let relative;
+    let (world, exposure) = match settings.precision {
+        Precision::F64 => (world, exposure),
+        Precision::F32 => {
+            let by = exposure.camera.origin;
+            relative = (world.shifted(by), exposure.shifted(by));
+            (&relative.0, &relative.1)
+        }
+    };
     let (w, h) = (settings.width as usize, settings.height as usize);
     let mut rgb = crate::frame::buffer(3 * w * h);
     let mut alpha = settings.alpha.then(|| crate::frame::buffer(w * h));
@@ -266,7 +299,7 @@ enum Samples {
 /// Runs `pass` over every band of rows in parallel; fills `spread` (when not empty) with each
 /// pixel's largest channel range.
 fn run_pass(kernel: Kernel, pass: &Pass, planes: &mut Planes, spread: &mut [f32]) -> RowStats {
-    let rows = kernel.band_rows();
+    let rows = kernel.band_rows(pass.settings.precision);
     let w = pass.settings.width as usize;
     let bands = (pass.settings.height as usize).div_ceil(rows);
     let mut spreads = in_bands((!spread.is_empty()).then_some(spread), w * rows, bands);

@@ -6,7 +6,7 @@
 
 use super::accel::{FromOrigin, Rays};
 use super::intersect::Ray;
-use super::lanes::{Lanes, Mask};
+use super::lanes::{Lanes, MAX_LANES, Mask};
 use super::sample::{Dims, Pattern, Seed};
 use super::shade::{self, Eye};
 use super::vec3::V3;
@@ -75,43 +75,45 @@ impl std::ops::Add for RowStats {
     }
 }
 
-/// Up to 16 pixels traced together. Lane k holds a pixel when bit k of `valid` is set; other
+/// Up to `MAX_LANES` pixels traced together. Lane k holds a pixel when bit k of `valid` is set; other
 /// lanes repeat the first pixel (a valid ray, masked out of every result).
 #[derive(Clone, Copy)]
 struct Pixels {
-    rows: [u32; 16],
-    cols: [u32; 16],
+    rows: [u32; MAX_LANES],
+    cols: [u32; MAX_LANES],
     valid: u32,
 }
 
 impl Pixels {
-    /// The pixels `at(k)` gives for lanes 0..16, where it gives one.
-    fn new(at: impl Fn(usize) -> Option<(u32, u32)>) -> Pixels {
-        let (mut rows, mut cols, mut valid) = ([0; 16], [0; 16], 0u32);
-        for k in 0..16 {
+    /// The pixels `at(k)` gives for lanes 0..n, where it gives one.
+    #[inline(always)]
+    fn new(n: usize, at: impl Fn(usize) -> Option<(u32, u32)>) -> Pixels {
+        let (mut rows, mut cols, mut valid) = ([0; MAX_LANES], [0; MAX_LANES], 0u32);
+        for k in 0..n {
             if let Some((r, c)) = at(k) {
                 (rows[k], cols[k]) = (r, c);
                 valid |= 1 << k;
             }
         }
         let lead = valid.trailing_zeros() as usize;
-        for k in (0..16).filter(|k| valid >> k & 1 == 0) {
+        for k in (0..n).filter(|k| valid >> k & 1 == 0) {
             (rows[k], cols[k]) = (rows[lead], cols[lead]);
         }
         Pixels { rows, cols, valid }
     }
 
     fn lanes(&self) -> impl Iterator<Item = usize> + '_ {
-        (0..16).filter(|k| self.valid >> k & 1 == 1)
+        (0..MAX_LANES).filter(|k| self.valid >> k & 1 == 1)
     }
 }
 
-/// Rows of a tile of `n` lanes: packets are near-square tiles (4×4 for 16 lanes, 4×2 for 8),
+/// Rows of a tile of `n` lanes: packets are near-square tiles (4×8 for 32 lanes, 4×4 for 16,
+/// 2×4 for 8),
 /// whose rays stay closer together than a strip's, so they visit fewer hierarchy nodes and
 /// more often hit one object.
 pub(super) const fn tile_rows(n: usize) -> usize {
     match n {
-        16 => 4,
+        32 | 16 => 4,
         8 | 4 => 2,
         _ => 1,
     }
@@ -120,9 +122,9 @@ pub(super) const fn tile_rows(n: usize) -> usize {
 /// What a packet found for its pixels: the f32 means (already made finite), spreads and
 /// coverage (0 without alpha).
 struct Means {
-    rgb: [[f32; 3]; 16],
-    spread: [f32; 16],
-    alpha: [f32; 16],
+    rgb: [[f32; 3]; MAX_LANES],
+    spread: [f32; MAX_LANES],
+    alpha: [f32; MAX_LANES],
 }
 
 /// A pass that traces every pixel of a band of `tile_rows(V::N)` rows starting at `top` (the
@@ -142,7 +144,7 @@ pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
         if pass.stopped() {
             break;
         }
-        let pixels = Pixels::new(|k| {
+        let pixels = Pixels::new(V::N, |k| {
             let (r, c) = (k as u32 / tile_w, left + k as u32 % tile_w);
             (k < V::N && r < rows && c < w).then_some((top + r, c))
         });
@@ -177,8 +179,8 @@ pub(super) fn marked<V: Lanes>(
         if pass.stopped() {
             break;
         }
-        let packet_pixels = Pixels::new(|k| pixels.get(k).map(|&p| (p / w, p % w)));
-        let old: [[f32; 4]; 16] = std::array::from_fn(|k| {
+        let packet_pixels = Pixels::new(V::N, |k| pixels.get(k).map(|&p| (p / w, p % w)));
+        let old = per_lane(V::N, [0.0; 4], |k| {
             let p = pixels[k.min(pixels.len() - 1)] as usize;
             let a = alpha.map_or(0.0, |a| a[p]);
             [rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2], a]
@@ -200,7 +202,7 @@ pub(super) fn marked<V: Lanes>(
 fn packet<V: Lanes>(
     pass: &Pass,
     px: &Pixels,
-    old: Option<&[[f32; 4]; 16]>,
+    old: Option<&[[f32; 4]; MAX_LANES]>,
     spread: bool,
     stats: &mut RowStats,
 ) -> Means {
@@ -212,10 +214,13 @@ fn packet<V: Lanes>(
         (Samples::All(n), Sampler::Stratified) => Pattern::stratified(n),
         (Samples::All(_), Sampler::Random) => Pattern::Independent,
     };
-    let seeds: [Seed; 16] = std::array::from_fn(|k| {
-        let pixel = u64::from(px.rows[k]) * u64::from(s.width) + u64::from(px.cols[k]);
-        Seed::new(pattern, pass.frame, pixel)
-    });
+    let pixel = |k: usize| u64::from(px.rows[k]) * u64::from(s.width) + u64::from(px.cols[k]);
+    let centre = Seed::new(Pattern::Centre, 0, 0);
+    let seeds = match pattern {
+        // The centre needs no seed.
+        Pattern::Centre => [centre; MAX_LANES],
+        _ => per_lane(V::N, centre, |k| Seed::new(pattern, pass.frame, pixel(k))),
+    };
     let (first, end) = match pass.samples {
         Samples::All(n) => (0, n),
         Samples::More { have, total } => (have, total),
@@ -229,10 +234,9 @@ fn packet<V: Lanes>(
         V3::<V>::splat(DVec3::INFINITY),
         V3::<V>::splat(DVec3::NEG_INFINITY),
     );
-    let dims: Option<[Dims; 16]> = pass.exposure.map(|_| {
-        std::array::from_fn(|k| {
-            let pixel = u64::from(px.rows[k]) * u64::from(s.width) + u64::from(px.cols[k]);
-            Dims::new(pattern, pass.frame, pixel)
+    let dims = pass.exposure.map(|_| {
+        per_lane(V::N, Dims::new(pattern, 0, 0), |k| {
+            Dims::new(pattern, pass.frame, pixel(k))
         })
     });
     for k in (first..end).take_while(|_| !pass.stopped()) {
@@ -274,9 +278,9 @@ fn packet<V: Lanes>(
         }
     }
     let mut means = Means {
-        rgb: [[0.0; 3]; 16],
-        spread: [0.0; 16],
-        alpha: [0.0; 16],
+        rgb: [[0.0; 3]; MAX_LANES],
+        spread: [0.0; MAX_LANES],
+        alpha: [0.0; MAX_LANES],
     };
     if range {
         let d = hi - lo;
@@ -301,6 +305,16 @@ fn packet<V: Lanes>(
     }
     stats.samples += u64::from(end - first) * u64::from(px.valid.count_ones());
     means
+}
+
+/// `f(k)` for lanes 0..n, `fill` beyond.
+#[inline(always)]
+fn per_lane<T: Copy>(n: usize, fill: T, mut f: impl FnMut(usize) -> T) -> [T; MAX_LANES] {
+    let mut out = [fill; MAX_LANES];
+    for (k, x) in out.iter_mut().enumerate().take(n) {
+        *x = f(k);
+    }
+    out
 }
 
 /// The mean of a pixel's samples: `sum` over this pass's samples, and when the pass extends
@@ -337,14 +351,19 @@ fn edge_spread(means: &mut Means, n: u32) {
 /// Each lane's mean as f32. When every value is within ±f32::MAX (the usual case, checked in
 /// the vector) the conversion cannot overflow or give NaN, and `finite` would change nothing.
 #[inline(always)]
-fn finish<V: Lanes>(mean: V3<V>, px: &Pixels, rgb: &mut [[f32; 3]; 16], stats: &mut RowStats) {
+fn finish<V: Lanes>(
+    mean: V3<V>,
+    px: &Pixels,
+    rgb: &mut [[f32; 3]; MAX_LANES],
+    stats: &mut RowStats,
+) {
     let (max, min) = (
         V::splat(f64::from(f32::MAX)),
         V::splat(-f64::from(f32::MAX)),
     );
     let within = |v: V| v.le(max).and(min.le(v));
     let tame = within(mean.x).and(within(mean.y)).and(within(mean.z));
-    let mut c = [[0f32; 16]; 3];
+    let mut c = [[0f32; MAX_LANES]; 3];
     mean.x.store_f32(&mut c[0]);
     mean.y.store_f32(&mut c[1]);
     mean.z.store_f32(&mut c[2]);
@@ -361,11 +380,11 @@ fn finish<V: Lanes>(mean: V3<V>, px: &Pixels, rgb: &mut [[f32; 3]; 16], stats: &
 
 /// Sub-pixel offsets of sample `k` for each lane's pixel (see `sample`).
 #[inline(always)]
-fn offsets<V: Lanes>(pattern: Pattern, seeds: &[Seed; 16], k: u32) -> (V, V) {
+fn offsets<V: Lanes>(pattern: Pattern, seeds: &[Seed; MAX_LANES], k: u32) -> (V, V) {
     if pattern == Pattern::Centre {
         return (V::splat(0.5), V::splat(0.5));
     }
-    let (mut u, mut v) = ([0.0; 16], [0.0; 16]);
+    let (mut u, mut v) = ([0.0; MAX_LANES], [0.0; MAX_LANES]);
     for i in 0..V::N {
         (u[i], v[i]) = seeds[i].offset(pattern, k);
     }
@@ -391,10 +410,10 @@ fn sampled_rays<V: Lanes>(
     col: V,
     u: V,
     v: V,
-    (pattern, dims, k): (Pattern, &[Dims; 16], u32),
+    (pattern, dims, k): (Pattern, &[Dims; MAX_LANES], u32),
 ) -> Rays<V> {
-    let mut cameras = [&exposure.camera; 16];
-    let mut disc = [(0.0, 0.0); 16];
+    let mut cameras = [&exposure.camera; MAX_LANES];
+    let mut disc = [(0.0, 0.0); MAX_LANES];
     for lane in 0..V::N {
         let [t, a, b] = dims[lane].at(pattern, k);
         if !exposure.instants.is_empty() {

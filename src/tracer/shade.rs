@@ -9,7 +9,7 @@
 use super::World;
 use super::accel::{FromOrigin, Nearest, Rays};
 use super::intersect::Ray;
-use super::lanes::{F64x1, Lanes, Mask};
+use super::lanes::{F64x1, Lanes, MAX_LANES, Mask};
 use super::vec3::V3;
 use crate::scene::{Light, Material, Shape};
 use glam::DVec3;
@@ -157,7 +157,7 @@ pub(super) struct Surface<'a, V: Lanes> {
     pub reflection: V,
     /// Each lane's material: one reference when every lane hit the same object (the common
     /// case, shaded with splatted constants), else one per lane.
-    pub materials: [&'a Material; 16],
+    pub materials: [&'a Material; MAX_LANES],
     pub shared: bool,
 }
 
@@ -184,11 +184,11 @@ impl<'a, V: Lanes> Surface<'a, V> {
                 diffuse: V3::splat(m.diffuse),
                 specular: V3::splat(m.specular),
                 reflection: V::splat(m.reflection),
-                materials: [m; 16],
+                materials: [m; MAX_LANES],
                 shared,
             };
         }
-        let mut objects = [first as usize; 16];
+        let mut objects = [first as usize; MAX_LANES];
         {
             let ids = hit.object.array();
             for (k, o) in objects.iter_mut().enumerate().take(V::N) {
@@ -200,8 +200,8 @@ impl<'a, V: Lanes> Surface<'a, V> {
         // Closures below see plain f64 only: a closure is compiled on its own, outside the
         // kernel's `#[target_feature]` function, so lane operations must stay out of it.
         let material = |k: usize| &scene.materials[scene.objects[objects[k]].material];
-        let materials: [&Material; 16] = std::array::from_fn(material);
-        let anchors: [(DVec3, DVec3, bool); 16] =
+        let materials: [&Material; MAX_LANES] = std::array::from_fn(material);
+        let anchors: [(DVec3, DVec3, bool); MAX_LANES] =
             std::array::from_fn(|k| anchor(scene.objects[objects[k]].shape));
         let plane_bits = (0..V::N)
             .filter(|&k| anchors[k].2)
@@ -236,7 +236,7 @@ impl<'a, V: Lanes> Surface<'a, V> {
             return specular_power(x, self.materials[0]);
         }
         let x = x.array();
-        V::from_fn(|k| specular_power(F64x1(x[k]), self.materials[k]).0)
+        V::from_fn(|k| specular_power(V::One::splat(x[k]), self.materials[k]).lane(0))
     }
 }
 

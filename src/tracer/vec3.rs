@@ -3,7 +3,7 @@
 //! v · (1 / √(v·v))), so a lane holds exactly what the scalar `DVec3` code held. `a * b` is
 //! the component-wise product, `a * s` and `a / s` scale by one lane value per vector.
 
-use super::lanes::Lanes;
+use super::lanes::{Lanes, MAX_LANES};
 use glam::DVec3;
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
@@ -68,7 +68,10 @@ impl<V: Lanes> V3<V> {
     /// Lanes from a function of the lane index.
     #[inline(always)]
     pub fn from_fn(mut f: impl FnMut(usize) -> DVec3) -> V3<V> {
-        let v: [DVec3; 16] = std::array::from_fn(|k| if k < V::N { f(k) } else { DVec3::ZERO });
+        let mut v = [DVec3::ZERO; MAX_LANES];
+        for (k, x) in v.iter_mut().enumerate().take(V::N) {
+            *x = f(k);
+        }
         V3 {
             x: V::from_fn(|k| v[k].x),
             y: V::from_fn(|k| v[k].y),

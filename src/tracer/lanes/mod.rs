@@ -1,8 +1,12 @@
-//! Lane types: N values of f64 under one instruction. Every operation here is one IEEE-754
-//! operation per lane (add, sub, mul, div, sqrt, compare, select, sign-bit copies): no fused
-//! multiply-add, no approximation, so lane k of any width computes exactly the bits the
-//! one-lane type computes. That is what lets the widest kernel the CPU has write the same
-//! bytes as the scalar oracle (`F64x1`).
+//! Lane types: N values of f64 (or of f32) under one instruction. Every operation here is one
+//! IEEE-754 operation per lane (add, sub, mul, div, sqrt, compare, select, sign-bit copies): no
+//! fused multiply-add, no approximation, so lane k of any width computes exactly the bits the
+//! one-lane type of its precision computes. That is what lets the widest kernel the CPU has
+//! write the same bytes as the scalar oracle (`F64x1`, `F32x1`).
+//!
+//! Values enter and leave as f64 whatever the lane type: `splat` and `load` round to the
+//! lane's precision (to nearest, as `as f32`), `store` and `lane` widen exactly. So one
+//! generic kernel serves both precisions, and scene data is rounded once, where it enters.
 //!
 //! Comparisons are ordered (false when either side is NaN), like Rust's `<` on f64; `min` and
 //! `max` follow x86 (`if a < b { a } else { b }`), which is only used where no NaN can occur.
@@ -11,6 +15,10 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 
 #[cfg(target_arch = "x86_64")]
 pub mod x86;
+
+/// The most lanes a packet has (16 f32 in each of two AVX-512 registers): the size of the
+/// per-lane arrays around the kernels.
+pub const MAX_LANES: usize = 32;
 
 /// A set of lanes, the result of a comparison.
 pub trait Mask: Copy {
@@ -39,7 +47,8 @@ pub trait Mask: Copy {
     }
 }
 
-/// N lanes of f64 (or, later, of a narrower float: values enter through `splat` and `load`).
+/// N lanes of f64 or f32; values enter through `splat` and `load` (rounded to the lanes'
+/// precision) and leave through `store` and `lane` (exactly).
 pub trait Lanes:
     Copy
     + Add<Output = Self>
@@ -50,6 +59,15 @@ pub trait Lanes:
 {
     const N: usize;
     type M: Mask;
+    /// One lane of the same precision: what per-lane scalar code computes in, so a lane's
+    /// value never depends on the width.
+    type One: Lanes<M = bool>;
+    /// A magnitude whose reciprocal is finite in this precision: it stands in for a zero
+    /// direction component in the slab test.
+    const TINY: f64;
+    /// How much earlier than computed a ray may enter a box and still be tested against its
+    /// spheres: 0 in f64, whose boxes are padded enough; 2^-16 in f32 (see `accel::Slabs`).
+    const BOX_SLACK: f64;
     fn splat(x: f64) -> Self;
     /// Lanes from `x[..N]`.
     fn load(x: &[f64]) -> Self;
@@ -70,8 +88,8 @@ pub trait Lanes:
     fn max(self, o: Self) -> Self;
     /// The lanes in `[..N]` of an array.
     #[inline(always)]
-    fn array(self) -> [f64; 16] {
-        let mut out = [0.0; 16];
+    fn array(self) -> [f64; MAX_LANES] {
+        let mut out = [0.0; MAX_LANES];
         self.store(&mut out);
         out
     }
@@ -84,7 +102,7 @@ pub trait Lanes:
     #[inline(always)]
     fn from_fn(f: impl FnMut(usize) -> f64) -> Self {
         let mut f = f;
-        let mut v = [0.0; 16];
+        let mut v = [0.0; MAX_LANES];
         for (k, x) in v.iter_mut().enumerate().take(Self::N) {
             *x = f(k);
         }
@@ -176,6 +194,9 @@ impl<L: Lanes> Neg for Pair<L> {
 impl<L: Lanes> Lanes for Pair<L> {
     const N: usize = 2 * L::N;
     type M = PairMask<L::M>;
+    type One = L::One;
+    const TINY: f64 = L::TINY;
+    const BOX_SLACK: f64 = L::BOX_SLACK;
     #[inline(always)]
     fn splat(x: f64) -> Self {
         Pair(L::splat(x), L::splat(x))
@@ -232,9 +253,13 @@ impl<L: Lanes> Lanes for Pair<L> {
     }
 }
 
-/// One lane: the scalar oracle every wider type must match bit for bit.
+/// One lane of f64: the scalar oracle every wider f64 type must match bit for bit.
 #[derive(Debug, Clone, Copy)]
 pub struct F64x1(pub f64);
+
+/// One lane of f32: the scalar oracle of the f32 types.
+#[derive(Debug, Clone, Copy)]
+pub struct F32x1(pub f32);
 
 impl Mask for bool {
     #[inline(always)]
@@ -267,90 +292,111 @@ impl Mask for bool {
     }
 }
 
-macro_rules! scalar_op {
-    ($trait:ident, $f:ident, $op:tt) => {
-        impl $trait for F64x1 {
-            type Output = F64x1;
+/// The one-lane type over the float `$f`.
+macro_rules! scalar_lanes {
+    ($t:ident, $f:ident, $tiny:expr, $slack:expr) => {
+        impl Add for $t {
+            type Output = $t;
             #[inline(always)]
-            fn $f(self, o: F64x1) -> F64x1 {
-                F64x1(self.0 $op o.0)
+            fn add(self, o: $t) -> $t {
+                $t(self.0 + o.0)
+            }
+        }
+        impl Sub for $t {
+            type Output = $t;
+            #[inline(always)]
+            fn sub(self, o: $t) -> $t {
+                $t(self.0 - o.0)
+            }
+        }
+        impl Mul for $t {
+            type Output = $t;
+            #[inline(always)]
+            fn mul(self, o: $t) -> $t {
+                $t(self.0 * o.0)
+            }
+        }
+        impl Div for $t {
+            type Output = $t;
+            #[inline(always)]
+            fn div(self, o: $t) -> $t {
+                $t(self.0 / o.0)
+            }
+        }
+        impl Neg for $t {
+            type Output = $t;
+            #[inline(always)]
+            fn neg(self) -> $t {
+                $t(-self.0)
+            }
+        }
+        impl Lanes for $t {
+            const N: usize = 1;
+            type M = bool;
+            type One = $t;
+            const TINY: f64 = $tiny;
+            const BOX_SLACK: f64 = $slack;
+            #[inline(always)]
+            fn splat(x: f64) -> Self {
+                $t(x as $f)
+            }
+            #[inline(always)]
+            fn load(x: &[f64]) -> Self {
+                $t(x[0] as $f)
+            }
+            #[inline(always)]
+            fn store(self, out: &mut [f64]) {
+                out[0] = f64::from(self.0);
+            }
+            #[inline(always)]
+            fn store_f32(self, out: &mut [f32]) {
+                out[0] = self.0 as f32;
+            }
+            #[inline(always)]
+            fn sqrt(self) -> Self {
+                $t(self.0.sqrt())
+            }
+            #[inline(always)]
+            fn copysign(self, s: Self) -> Self {
+                $t(self.0.copysign(s.0))
+            }
+            #[inline(always)]
+            fn lt(self, o: Self) -> bool {
+                self.0 < o.0
+            }
+            #[inline(always)]
+            fn le(self, o: Self) -> bool {
+                self.0 <= o.0
+            }
+            #[inline(always)]
+            fn gt(self, o: Self) -> bool {
+                self.0 > o.0
+            }
+            #[inline(always)]
+            fn eq(self, o: Self) -> bool {
+                self.0 == o.0
+            }
+            #[inline(always)]
+            fn select(m: bool, a: Self, b: Self) -> Self {
+                if m { a } else { b }
+            }
+            #[inline(always)]
+            fn min(self, o: Self) -> Self {
+                if self.0 < o.0 { self } else { o }
+            }
+            #[inline(always)]
+            fn max(self, o: Self) -> Self {
+                if self.0 > o.0 { self } else { o }
+            }
+            #[inline(always)]
+            fn lane(self, _: usize) -> f64 {
+                f64::from(self.0)
             }
         }
     };
 }
-scalar_op!(Add, add, +);
-scalar_op!(Sub, sub, -);
-scalar_op!(Mul, mul, *);
-scalar_op!(Div, div, /);
-
-impl Neg for F64x1 {
-    type Output = F64x1;
-    #[inline(always)]
-    fn neg(self) -> F64x1 {
-        F64x1(-self.0)
-    }
-}
-
-impl Lanes for F64x1 {
-    const N: usize = 1;
-    type M = bool;
-    #[inline(always)]
-    fn splat(x: f64) -> Self {
-        F64x1(x)
-    }
-    #[inline(always)]
-    fn load(x: &[f64]) -> Self {
-        F64x1(x[0])
-    }
-    #[inline(always)]
-    fn store(self, out: &mut [f64]) {
-        out[0] = self.0;
-    }
-    #[inline(always)]
-    fn store_f32(self, out: &mut [f32]) {
-        out[0] = self.0 as f32;
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        F64x1(self.0.sqrt())
-    }
-    #[inline(always)]
-    fn copysign(self, s: Self) -> Self {
-        F64x1(self.0.copysign(s.0))
-    }
-    #[inline(always)]
-    fn lt(self, o: Self) -> bool {
-        self.0 < o.0
-    }
-    #[inline(always)]
-    fn le(self, o: Self) -> bool {
-        self.0 <= o.0
-    }
-    #[inline(always)]
-    fn gt(self, o: Self) -> bool {
-        self.0 > o.0
-    }
-    #[inline(always)]
-    fn eq(self, o: Self) -> bool {
-        self.0 == o.0
-    }
-    #[inline(always)]
-    fn select(m: bool, a: Self, b: Self) -> Self {
-        if m { a } else { b }
-    }
-    #[inline(always)]
-    fn min(self, o: Self) -> Self {
-        if self.0 < o.0 { self } else { o }
-    }
-    #[inline(always)]
-    fn max(self, o: Self) -> Self {
-        if self.0 > o.0 { self } else { o }
-    }
-    #[inline(always)]
-    fn lane(self, _: usize) -> f64 {
-        self.0
-    }
-}
+scalar_lanes!(F64x1, f64, 1e-300, 0.0);
+scalar_lanes!(F32x1, f32, 1e-30, 1.0 / 65536.0);
 
 #[cfg(test)]
 mod tests {
