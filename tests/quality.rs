@@ -8,7 +8,7 @@ use common::*;
 use rayreel::cli::{Cli, Command, job::Job};
 use rayreel::sequence::{self, Quality, Sequence};
 use rayreel::tools::measure::{self, compare};
-use rayreel::tracer::{Adaptive, Sampler, Settings};
+use rayreel::tracer::{Adaptive, Precision, Sampler, Settings};
 
 /// The orbit sequence as `rayreel render sequences/orbit.yaml ARGS` sees it.
 fn job(args: &[&str]) -> Sequence {
@@ -203,6 +203,16 @@ fn upscale(rgb: &[u8], hw: u32, w: u32, h: u32) -> Vec<u8> {
 }
 
 #[test]
+fn the_reference_is_f64_whatever_the_file_says() {
+    let f32_file = job(&["--precision", "f32"]).settings;
+    assert_eq!(f32_file.precision, Precision::F32);
+    for trees in [false, true] {
+        let r = measure::reference_settings(&f32_file, trees);
+        assert_eq!(r.precision, Precision::F64);
+    }
+}
+
+#[test]
 fn draft_halves_the_size_unless_a_size_is_given() {
     let s = job(&["--quality", "draft"]).settings;
     assert_eq!(
@@ -240,22 +250,24 @@ fn measure_writes_csv_json_and_a_plot() {
     let csv = std::fs::read_to_string(tmp.join("m/measure.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     let columns = lines[0].split(',').count();
-    assert_eq!(columns, 13);
+    assert_eq!(columns, 21);
     assert!(
-        lines[0].ends_with(",encoding") && lines[1].ends_with(",srgb"),
+        lines[0].ends_with(",precision,encoding") && lines[1].ends_with(",f64,srgb"),
         "{csv}"
     );
     assert_eq!(
         lines.len(),
-        1 + measure::ladder(&orbit((32, 18)).settings).len()
+        1 + measure::ladder(&orbit((32, 18)).settings).len() + 2
     );
     for line in &lines[1..] {
         let cells: Vec<&str> = line.split(',').collect();
         assert_eq!(cells.len(), columns, "{line}");
+        // The columns against f64 are empty outside the precision rows.
+        let precision = cells[0] == "precision";
         assert!(
-            cells[2..columns - 1]
+            cells[2..columns - 2]
                 .iter()
-                .all(|c| c.parse::<f64>().is_ok()),
+                .all(|c| c.parse::<f64>().is_ok() || (!precision && c.is_empty())),
             "{line}"
         );
     }
@@ -268,4 +280,73 @@ fn measure_writes_csv_json_and_a_plot() {
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
     assert_eq!(svg.matches("<text").count(), svg.matches("</text>").count());
     assert!(svg.contains(">final</text>") && svg.contains("<polyline"));
+    assert!(svg.contains(">f64</text>") && svg.contains(">f32</text>"));
+}
+
+/// `measure` on a file that says f32: the ladder in f32, the reference and the first precision
+/// row in f64, the second in f32; every column of the precision rows parses, in the table,
+/// the CSV and the JSON (counted and parsed, not timed).
+#[test]
+fn measure_lists_f64_and_f32_rows_for_an_f32_file() {
+    let tmp = scratch("measure_f32");
+    let yaml = std::fs::read_to_string(repo().join("sequences/orbit.yaml")).unwrap();
+    let yaml = yaml.replacen("render:\n", "render:\n  precision: f32\n", 1);
+    std::fs::write(tmp.join("f32.yaml"), yaml).unwrap();
+    let out = run_in(
+        &tmp,
+        &[
+            "measure", "f32.yaml", "--size", "16x9", "--runs", "2", "--out", "m",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(table.contains("the ladder in f32"), "{table}");
+    let block = table.split("against the f64 image\n").nth(1).expect(&table);
+    let rows: Vec<Vec<&str>> = block
+        .lines()
+        .filter(|l| l.starts_with("precision "))
+        .map(|l| l.split_whitespace().collect())
+        .collect();
+    assert_eq!(rows.len(), 2, "{table}");
+    for (row, name) in rows.iter().zip(["f64", "f32"]) {
+        assert_eq!(row[..2], ["precision", name], "{table}");
+        assert!(row[2].trim_end_matches('x').parse::<f64>().unwrap() > 0.0);
+        for cell in &row[3..] {
+            assert!(cell.trim_end_matches('%').parse::<f64>().is_ok(), "{table}");
+        }
+    }
+    // The f64 row against itself: the same image.
+    assert_eq!(
+        rows[0][2..],
+        ["1.00x", "0.000", "inf", "0", "0.000%", "0.000%"]
+    );
+    assert!(block.contains("target: f32 at most 0.05% of pixels off by more than 2/255: "));
+    let json: serde_yaml::Value =
+        serde_yaml::from_str(&std::fs::read_to_string(tmp.join("m/measure.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["reference"]["precision"].as_str(), Some("f64"));
+    let rows = json["rows"].as_sequence().unwrap();
+    assert!(rows[0]["precision"].as_str() == Some("f32") && rows[0]["rmse_vs_f64"].is_null());
+    let precision: Vec<_> = rows.iter().filter(|r| r["group"] == "precision").collect();
+    assert_eq!(precision.len(), 2);
+    for (r, name) in precision.iter().zip(["f64", "f32"]) {
+        assert_eq!(r["precision"].as_str(), Some(name));
+        for key in [
+            "speedup_vs_f64",
+            "rmse_vs_f64",
+            "psnr_db_vs_f64",
+            "share_off_2_vs_f64",
+        ] {
+            assert!(r[key].as_f64().is_some(), "{key} of {r:?}");
+        }
+    }
+    assert_eq!(precision[0]["share_off_2_vs_f64"].as_f64(), Some(0.0));
+}
+
+#[test]
+fn share_off_by_more_than_two_levels() {
+    let a = [10u8, 10, 10, 10, 10, 10, 10, 10, 10, 10, 10, 10];
+    let b = [11u8, 10, 10, 12, 10, 10, 10, 13, 10, 10, 10, 10];
+    let e = compare(&a, &b);
+    assert_eq!((e.max, e.off, e.off2), (3, 0.5, 0.25));
 }

@@ -1,0 +1,341 @@
+//! `rayreel measure`: what each speed/accuracy setting costs and buys on one frame of the
+//! user's own scene. A converged reference is rendered once; then a ladder of settings
+//! (uniform samples, adaptive thresholds, max_depth, the presets), each timed as the median of
+//! several runs and compared with the reference on the 8-bit image the user would get.
+//! Last, the file's own settings in f64 and in f32, rendered in turn, each also compared with
+//! the f64 image (the reference itself is always f64).
+
+use crate::frame::Frame;
+use crate::schedule::render_with;
+use crate::sequence::{Quality, Sequence, preset};
+use crate::tracer::{Adaptive, Precision, Sampler, Settings, World};
+use crate::transfer::Encoding;
+use std::time::Instant;
+
+mod plot;
+mod report;
+
+/// Samples per pixel of the reference (a jittered 32×32 grid) and its max_depth: with the
+/// reflection coefficients users give (≤ 1) and the 16th bounce weighted at most by
+/// r^15, deeper paths add nothing visible in practice; `convergence` reports the check.
+pub const REFERENCE_SAMPLES: u32 = 1024;
+pub const REFERENCE_DEPTH: u32 = 16;
+/// The reference where paths branch (glass): a tree of depth d traces up to 2^d − 1 rays a
+/// sample, so a 16×16 grid at depth 12 costs about what the plain reference does.
+pub const TREE_REFERENCE_SAMPLES: u32 = 256;
+pub const TREE_REFERENCE_DEPTH: u32 = 12;
+/// The reference is computed in f64 whatever the file says: it is what f32 is measured against.
+pub const REFERENCE_PRECISION: Precision = Precision::F64;
+/// Issue 19's target for f32: at most this share of pixels off by more than 2 levels from the
+/// f64 image of the same settings.
+pub const F32_TARGET_OFF2: f64 = 0.0005;
+
+/// How far an image is from the reference, in 8-bit levels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Error {
+    pub rmse: f64,
+    pub psnr: f64,
+    pub max: u8,
+    /// Share of pixels with some channel off by more than one level.
+    pub off: f64,
+    /// Share of pixels with some channel off by more than two levels.
+    pub off2: f64,
+}
+
+pub fn compare(a: &[u8], b: &[u8]) -> Error {
+    assert_eq!(a.len(), b.len(), "images of different sizes");
+    let mut sum = 0.0;
+    let mut max = 0u8;
+    let (mut off, mut off2) = (0usize, 0usize);
+    for (pa, pb) in a.chunks(3).zip(b.chunks(3)) {
+        let mut worst = 0;
+        for (x, y) in pa.iter().zip(pb) {
+            let d = x.abs_diff(*y);
+            sum += f64::from(d) * f64::from(d);
+            worst = worst.max(d);
+        }
+        max = max.max(worst);
+        off += usize::from(worst > 1);
+        off2 += usize::from(worst > 2);
+    }
+    let rmse = (sum / a.len() as f64).sqrt();
+    let psnr = if rmse == 0.0 {
+        f64::INFINITY
+    } else {
+        20.0 * (255.0 / rmse).log10()
+    };
+    let pixels = (a.len() / 3) as f64;
+    Error {
+        rmse,
+        psnr,
+        max,
+        off: off as f64 / pixels,
+        off2: off2 as f64 / pixels,
+    }
+}
+
+/// One rung of the ladder.
+#[derive(Debug, Clone)]
+pub struct Row {
+    pub group: &'static str,
+    pub label: String,
+    pub settings: Settings,
+    /// Whether the image is rendered at half size and upscaled (the draft preset).
+    pub half: bool,
+    pub samples_per_pixel: f64,
+    pub seconds: [f64; 3],
+    pub error: Error,
+    /// Precision rows only: against the f64 render of the same settings.
+    pub versus_f64: Option<Versus>,
+}
+
+/// A precision row against the f64 row of the same settings (the f64 row against itself).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Versus {
+    /// The median over rounds of that round's f64 time over this row's time.
+    pub speedup: f64,
+    pub error: Error,
+}
+
+/// Renders frame `n` with `settings` in place of the sequence's (building the geometry; the
+/// measurement itself builds it once for all its renders).
+pub fn render(seq: &Sequence, n: u64, settings: &Settings) -> Result<Frame, String> {
+    Ok(render_with(
+        &World::new(seq.scene.clone()),
+        seq,
+        n,
+        settings,
+    )?)
+}
+
+/// The reference `measure` compares against, for a scene whose paths are trees or not.
+pub fn reference_settings(base: &Settings, trees: bool) -> Settings {
+    let (samples, max_depth) = match trees {
+        false => (REFERENCE_SAMPLES, REFERENCE_DEPTH),
+        true => (TREE_REFERENCE_SAMPLES, TREE_REFERENCE_DEPTH),
+    };
+    Settings {
+        samples,
+        adaptive: None,
+        max_depth,
+        sampler: Sampler::Stratified,
+        depth: false,
+        alpha: false,
+        precision: REFERENCE_PRECISION,
+        ..*base
+    }
+}
+
+/// The ladder of settings measured against the reference.
+pub fn ladder(base: &Settings) -> Vec<(&'static str, String, Settings, bool)> {
+    let mut out = Vec::new();
+    let with = |samples, adaptive, max_depth| Settings {
+        samples,
+        adaptive,
+        max_depth,
+        depth: false,
+        alpha: false,
+        sampler: Sampler::Stratified,
+        ..*base
+    };
+    for n in [1, 2, 4, 8, 16, 32, 64, 128, 256] {
+        out.push((
+            "uniform",
+            format!("{n} spp"),
+            with(n, None, base.max_depth),
+            false,
+        ));
+    }
+    for t in [0.05f32, 0.02, 0.01] {
+        let a = Some(Adaptive {
+            threshold: t,
+            max_samples: 64,
+        });
+        out.push((
+            "adaptive",
+            format!("adaptive 4-64 @{t}"),
+            with(4, a, base.max_depth),
+            false,
+        ));
+    }
+    for d in 1..=8 {
+        out.push(("depth", format!("max_depth {d}"), with(16, None, d), false));
+    }
+    for (q, name) in [
+        (Quality::Draft, "draft"),
+        (Quality::Preview, "preview"),
+        (Quality::Final, "final"),
+    ] {
+        let mut s = with(1, None, base.max_depth);
+        preset(&mut s, q);
+        out.push(("preset", name.to_string(), s, q == Quality::Draft));
+    }
+    out
+}
+
+/// The file's own settings in f64 and in f32 (both, whatever the file says), f64 first.
+pub fn precisions(base: &Settings) -> [(String, Settings); 2] {
+    [Precision::F64, Precision::F32].map(|precision| {
+        let s = Settings {
+            precision,
+            depth: false,
+            alpha: false,
+            ..*base
+        };
+        (format!("precision {}", precision.name()), s)
+    })
+}
+
+/// The precision rows: rendered in turn, round by round, so a busy moment slows both alike.
+fn precision_rows(
+    world: &World,
+    seq: &Sequence,
+    n: u64,
+    runs: usize,
+    ref_image: &[u8],
+) -> Result<Vec<Row>, String> {
+    let pair = precisions(&seq.settings);
+    let mut times = [Vec::new(), Vec::new()];
+    let mut out = [(Vec::new(), 0.0), (Vec::new(), 0.0)];
+    for _ in 0..runs {
+        for (i, (_, s)) in pair.iter().enumerate() {
+            let (image, spp, t) = timed(world, seq, n, s, false, 1)?;
+            times[i].extend(t);
+            out[i] = (image, spp);
+        }
+    }
+    let rows = pair.into_iter().enumerate().map(|(i, (label, settings))| {
+        let ratios = (0..runs).map(|r| times[0][r] / times[i][r]).collect();
+        let versus = Versus {
+            speedup: spread(ratios)[0],
+            error: compare(&out[i].0, &out[0].0),
+        };
+        Row {
+            group: "precision",
+            label,
+            settings,
+            half: false,
+            samples_per_pixel: out[i].1,
+            seconds: spread(times[i].clone()),
+            error: compare(&out[i].0, ref_image),
+            versus_f64: Some(versus),
+        }
+    });
+    Ok(rows.collect())
+}
+
+/// Times `runs` renders; returns the 8-bit image of the last, samples per pixel and times.
+fn timed(
+    world: &World,
+    seq: &Sequence,
+    n: u64,
+    s: &Settings,
+    half: bool,
+    runs: usize,
+) -> Result<(Vec<u8>, f64, Vec<f64>), String> {
+    let mut times = Vec::new();
+    let mut last = None;
+    for _ in 0..runs {
+        let mut settings = *s;
+        if half {
+            settings.width = s.width.div_ceil(2);
+            settings.height = s.height.div_ceil(2);
+        }
+        let start = Instant::now();
+        let frame = render_with(world, seq, n, &settings)?;
+        times.push(start.elapsed().as_secs_f64());
+        last = Some(frame);
+    }
+    let frame = last.expect("at least one run");
+    let spp = frame.samples as f64 / (f64::from(s.width) * f64::from(s.height));
+    let image = if half {
+        upscale2(&frame.to_rgb8(), frame.width, s.width, s.height)
+    } else {
+        frame.to_rgb8()
+    };
+    Ok((image, spp, times))
+}
+
+/// Nearest-neighbour ×2, cropped to the full size: how a half-size draft compares.
+fn upscale2(rgb: &[u8], half_w: u32, w: u32, h: u32) -> Vec<u8> {
+    let mut out = Vec::with_capacity((3 * w * h) as usize);
+    for row in 0..h {
+        for col in 0..w {
+            let i = 3 * ((row / 2) * half_w + col / 2) as usize;
+            out.extend_from_slice(&rgb[i..i + 3]);
+        }
+    }
+    out
+}
+
+/// Median, min and max.
+fn spread(mut t: Vec<f64>) -> [f64; 3] {
+    t.sort_by(f64::total_cmp);
+    [t[t.len() / 2], t[0], t[t.len() - 1]]
+}
+
+pub struct Report {
+    /// The encoding of the 8-bit values the errors are measured on: the sequence's, so the
+    /// figures are the differences a viewer of its frames sees.
+    pub encoding: Encoding,
+    /// Samples per pixel and max_depth of the reference.
+    pub reference: (u32, u32),
+    pub reference_seconds: f64,
+    /// Error of a reference with half the samples, against the reference.
+    pub convergence: Error,
+    pub rows: Vec<Row>,
+}
+
+/// Renders the reference and the ladder; `progress` hears each rung as it finishes.
+pub fn measure(
+    seq: &Sequence,
+    n: u64,
+    runs: usize,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Report, String> {
+    let world = World::new(seq.scene.clone());
+    let reference = reference_settings(&seq.settings, world.trees());
+    let start = Instant::now();
+    let ref_image = render_with(&world, seq, n, &reference)?.to_rgb8();
+    let reference_seconds = start.elapsed().as_secs_f64();
+    progress(&format!(
+        "reference: {} spp, max_depth {}, {reference_seconds:.2} s",
+        reference.samples, reference.max_depth
+    ));
+    let half = Settings {
+        samples: reference.samples / 2,
+        ..reference
+    };
+    let convergence = compare(&render_with(&world, seq, n, &half)?.to_rgb8(), &ref_image);
+    let mut rows = Vec::new();
+    for (group, label, settings, half) in ladder(&seq.settings) {
+        let (image, spp, times) = timed(&world, seq, n, &settings, half, runs)?;
+        let error = compare(&image, &ref_image);
+        progress(&format!("{label}: rmse {:.3}", error.rmse));
+        rows.push(Row {
+            group,
+            label,
+            settings,
+            half,
+            samples_per_pixel: spp,
+            seconds: spread(times),
+            error,
+            versus_f64: None,
+        });
+    }
+    for row in precision_rows(&world, seq, n, runs, &ref_image)? {
+        let e = row.versus_f64.expect("a precision row").error;
+        progress(&format!(
+            "{}: rmse {:.3}, against f64 rmse {:.3}",
+            row.label, row.error.rmse, e.rmse
+        ));
+        rows.push(row);
+    }
+    Ok(Report {
+        encoding: seq.settings.encoding,
+        reference: (reference.samples, reference.max_depth),
+        reference_seconds,
+        convergence,
+        rows,
+    })
+}
