@@ -25,10 +25,11 @@ pub fn run(cli: Cli) -> Result<(), Error> {
 }
 
 /// What a valid sequence still deserves a warning for: keys the film never shows, frames with
-/// the camera inside an object.
+/// the camera inside an object, f32 frames traced in f64.
 fn warnings(seq: &Sequence) -> Vec<String> {
     let mut all = seq.warnings.clone();
     all.extend(crate::tools::preview::inside_warnings(seq));
+    all.extend(crate::tools::preview::precision_warnings(seq));
     all
 }
 

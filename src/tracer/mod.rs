@@ -9,6 +9,7 @@ pub mod glass;
 pub mod intersect;
 pub mod kernel;
 pub mod lanes;
+pub mod precision;
 mod rows;
 pub mod sample;
 pub mod shade;
@@ -210,7 +211,18 @@ fn render_frame(
     stop: &AtomicBool,
 ) -> Option<Frame> {
     // f32 traces in coordinates relative to the frame's camera, shifted in f64: positions
-    // near the camera keep their precision however far from the origin the scene lies.
+    // near the camera keep their precision however far from the origin the scene lies. A
+    // frame f32 cannot resolve is traced in f64 (see `precision`).
+    let f32_frame = settings.precision == Precision::F32
+        && precision::f32_limit(&world.scene, &exposure.camera, settings).is_none();
+    let settings = &Settings {
+        precision: if f32_frame {
+            Precision::F32
+        } else {
+            Precision::F64
+        },
+        ..*settings
+    };
     let relative;
     let (world, exposure) = match settings.precision {
         Precision::F64 => (world, exposure),

@@ -2,6 +2,8 @@
 //! the path plot and reported as warnings by `preview`, `check` and `render`.
 
 use super::*;
+use crate::shutter::Exposure;
+use crate::tracer::precision::Unresolved;
 
 /// Checks every sampled frame: inside a sphere, behind a plane (the side its normal points
 /// away from), or a camera that cannot be built or rolls over since the previous frame.
@@ -40,6 +42,44 @@ pub fn inside_warnings(seq: &Sequence) -> Vec<String> {
         report(&flags, &frames, &what, &mut bad, &mut warnings);
     }
     warnings
+}
+
+/// `frames 0-40: f32 places objects[3] (sphere) only to 6.1 pixels (limit 4), so it is traced
+/// in f64` for every run of frames f32 cannot resolve (see `tracer::precision`), when the
+/// settings ask for f32; sampled like `inside_warnings`. The pixels are the run's worst.
+pub fn precision_warnings(seq: &Sequence) -> Vec<String> {
+    use crate::tracer::{Precision, precision::f32_limit};
+    if seq.settings.precision != Precision::F32 {
+        return Vec::new();
+    }
+    let t = &seq.timeline;
+    let objects = seq.scene.objects.len().max(1) as u64;
+    let n = (INSIDE_BUDGET / objects).clamp(100, MAX_PATH_SAMPLES);
+    let limits = evenly_spaced(t.frame_count, n).into_iter().map(|f| {
+        let n = f + t.first_frame();
+        let camera = Exposure::of_frame(t, None, n).ok().map(|e| e.camera);
+        (
+            n,
+            camera.and_then(|c| f32_limit(&seq.scene, &c, &seq.settings)),
+        )
+    });
+    let mut runs: Vec<(u64, u64, Unresolved)> = Vec::new();
+    for (n, limit) in limits {
+        match (runs.last_mut(), limit) {
+            (Some((_, last, worst)), Some(u)) if worst.what == u.what => {
+                *last = n;
+                worst.pixels = worst.pixels.max(u.pixels);
+            }
+            (_, Some(u)) => runs.push((n, n, u)),
+            (_, None) => {}
+        }
+    }
+    runs.into_iter()
+        .map(|(a, b, u)| match a == b {
+            true => format!("frame {a}: {u}"),
+            false => format!("frames {a}-{b}: {u}"),
+        })
+        .collect()
 }
 
 /// Per object the camera enters: what to call it and, per position, whether it is inside.

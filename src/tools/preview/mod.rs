@@ -34,7 +34,7 @@ use panel::*;
 use plot::*;
 use style::*;
 
-pub use checks::inside_warnings;
+pub use checks::{inside_warnings, precision_warnings};
 pub use panel::{Panel, panels};
 pub use path_plot::path_plot;
 pub use sheet::{SheetLayout, TileOrigin, contact_sheet};
