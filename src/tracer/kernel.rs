@@ -1,10 +1,10 @@
 //! Which lane width traces a frame. The kernels are one generic code path (`rows::band`),
-//! instantiated for 1 lane (the scalar oracle, any CPU), packets of 8 lanes in pairs of AVX2
-//! registers (4 f64 per instruction) and packets of 16 lanes in pairs of AVX-512 registers
-//! (8 f64 per instruction), behind `#[target_feature]` entry points, so the released binary
-//! runs on any x86-64 and builds elsewhere. The widest the CPU has is used unless `RAYREEL_KERNEL=scalar|avx2|avx512`
-//! asks for another (tests and `rayreel bench` compare them); every width gives the same bytes.
-
+//! instantiated per precision for 1 lane (the scalar oracle, any CPU), packets in pairs of
+//! AVX2 registers (8 lanes of f64, 16 of f32) and packets of AVX-512 registers (16 lanes of
+//! f64 in two, 32 of f32 in two), behind one generic `#[target_feature]` entry point per CPU
+//! feature, so the released binary runs on any x86-64 and builds elsewhere. The widest the CPU
+//! has is used unless `RAYREEL_KERNEL=scalar|avx2|avx512` asks for another (tests and
+//! `rayreel bench` compare them); every width gives the same bytes in each precision.
 use super::intersect::Ray;
 use super::lanes::Lanes;
 use super::rows::{self, Old, Pass, RowOut, RowStats};
