@@ -1,8 +1,9 @@
 //! The core tracer: `render(scene, camera, settings, frame) → Frame`. Pixels are sampled at
 //! their centre (1 sample), on a jittered grid, or adaptively; rows spread over the rayon pool,
 //! and within a row rays travel in packets of as many f64 (or, with `render.precision: f32`,
-//! f32) lanes as the CPU has (`kernel`). Every pixel depends only on the scene, the camera, the frame number and its own coordinates,
-//! so a frame is byte-identical whatever the thread count, order of work or lane width.
+//! f32) lanes as the CPU has (`kernel`). Every pixel depends only on the scene, the camera,
+//! the frame number and its own coordinates, so a frame is byte-identical whatever the thread
+//! count, order of work or lane width.
 
 pub mod accel;
 pub mod glass;

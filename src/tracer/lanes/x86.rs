@@ -1,7 +1,7 @@
-//! x86-64 lanes: 4 × f64 or 8 × f32 in AVX registers, 8 × f64 or 16 × f32 in AVX-512 registers. Their methods are
-//! `#[inline(always)]` and only ever run inside the `#[target_feature]` entry points of
-//! `tracer::kernel`, after run-time detection said the CPU has the feature; inlined there,
-//! each becomes one instruction.
+//! x86-64 lanes: 4 × f64 or 8 × f32 in AVX registers, 8 × f64 or 16 × f32 in AVX-512
+//! registers. Their methods are `#[inline(always)]` and only ever run inside the
+//! `#[target_feature]` entry points of `tracer::kernel`, after run-time detection said the CPU
+//! has the feature; inlined there, each becomes one instruction.
 
 use super::{Lanes, Mask};
 use std::arch::x86_64::*;
