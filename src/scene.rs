@@ -140,30 +140,19 @@ impl Shape {
 }
 
 impl Light {
-    fn shifted(self, by: DVec3) -> Light {
-        match self {
-            Light::Point {
-                position,
-                intensity,
-            } => Light::Point {
-                position: position - by,
-                intensity,
-            },
-            Light::Spot {
-                position,
-                axis,
-                cos_inner,
-                cos_outer,
-                intensity,
-            } => Light::Spot {
-                position: position - by,
-                axis,
-                cos_inner,
-                cos_outer,
-                intensity,
-            },
-            other => other,
+    /// Where a point or spot light is; None for directional and ambient light.
+    pub fn position(&self) -> Option<DVec3> {
+        match *self {
+            Light::Point { position, .. } | Light::Spot { position, .. } => Some(position),
+            Light::Directional { .. } | Light::Ambient { .. } => None,
         }
+    }
+
+    fn shifted(mut self, by: DVec3) -> Light {
+        if let Light::Point { position, .. } | Light::Spot { position, .. } = &mut self {
+            *position -= by;
+        }
+        self
     }
 }
 

@@ -126,17 +126,15 @@ impl World {
     pub fn new(scene: Scene) -> World {
         let geometry = accel::Geometry::new(&scene.objects);
         let material = |i: usize| &scene.materials[scene.objects[i].material];
-        let opaque = scene
-            .objects
-            .iter()
-            .any(|o| scene.materials[o.material].transparent())
+        let clear = clear(&scene);
+        let opaque = (!clear.is_empty())
             .then(|| accel::Geometry::subset(&scene.objects, |i| !material(i).transparent()));
         World {
-            clear: clear(&scene),
             branches: scene.materials.iter().any(|m| m.branches()),
             scene,
             geometry,
             opaque,
+            clear,
         }
     }
 

@@ -9,8 +9,7 @@
 
 use super::Settings;
 use crate::camera::Camera;
-use crate::scene::{Light, Scene, Shape};
-use glam::DVec3;
+use crate::scene::{Scene, Shape};
 
 /// The largest surface error, in pixels, an f32 frame may have: measured, 1 pixel costs the
 /// talk's image about 55 dB of PSNR and 10 pixels about 43.
@@ -77,18 +76,11 @@ pub fn f32_limit(scene: &Scene, camera: &Camera, settings: &Settings) -> Option<
         note(format!("objects[{i}] ({kind})"), pixels);
     }
     for (i, l) in scene.lights.iter().enumerate() {
-        if let Some(p) = position(l)
+        if let Some(p) = l.position()
             && (p - camera.origin).length() > LARGEST
         {
             note(format!("lights[{i}]"), f64::INFINITY);
         }
     }
     worst
-}
-
-fn position(light: &Light) -> Option<DVec3> {
-    match *light {
-        Light::Point { position, .. } | Light::Spot { position, .. } => Some(position),
-        Light::Directional { .. } | Light::Ambient { .. } => None,
-    }
 }

@@ -29,12 +29,7 @@ pub(super) const INSIDE_BUDGET: u64 = 20_000_000;
 /// timelines are sampled (every frame up to 100 000, fewer in scenes of many objects).
 pub fn inside_warnings(seq: &Sequence) -> Vec<String> {
     let t = &seq.timeline;
-    let objects = seq.scene.objects.len().max(1) as u64;
-    let n = (INSIDE_BUDGET / objects).clamp(100, MAX_PATH_SAMPLES);
-    let frames: Vec<u64> = evenly_spaced(t.frame_count, n)
-        .into_iter()
-        .map(|f| f + t.first_frame())
-        .collect();
+    let frames = checked_frames(seq);
     let positions: Vec<DVec3> = frames.iter().map(|&f| t.pose_of(f).position).collect();
     let mut bad = vec![false; frames.len()];
     let mut warnings = Vec::new();
@@ -42,6 +37,16 @@ pub fn inside_warnings(seq: &Sequence) -> Vec<String> {
         report(&flags, &frames, &what, &mut bad, &mut warnings);
     }
     warnings
+}
+
+/// The frames the warnings look at: every frame up to 100 000, fewer in scenes of many
+/// objects (at most `INSIDE_BUDGET` object tests).
+fn checked_frames(seq: &Sequence) -> Vec<u64> {
+    let t = &seq.timeline;
+    let objects = seq.scene.objects.len().max(1) as u64;
+    let n = (INSIDE_BUDGET / objects).clamp(100, MAX_PATH_SAMPLES);
+    let frames = evenly_spaced(t.frame_count, n).into_iter();
+    frames.map(|f| f + t.first_frame()).collect()
 }
 
 /// `frames 0-40: f32 places objects[3] (sphere) only to 6.1 pixels (limit 4), so it is traced
@@ -53,10 +58,7 @@ pub fn precision_warnings(seq: &Sequence) -> Vec<String> {
         return Vec::new();
     }
     let t = &seq.timeline;
-    let objects = seq.scene.objects.len().max(1) as u64;
-    let n = (INSIDE_BUDGET / objects).clamp(100, MAX_PATH_SAMPLES);
-    let limits = evenly_spaced(t.frame_count, n).into_iter().map(|f| {
-        let n = f + t.first_frame();
+    let limits = checked_frames(seq).into_iter().map(|n| {
         let camera = Exposure::of_frame(t, None, n).ok().map(|e| e.camera);
         (
             n,

@@ -41,7 +41,7 @@ pub use sheet::{SheetLayout, TileOrigin, contact_sheet};
 pub use style::{BAD, PATH};
 
 use crate::camera::{Camera, Pose};
-use crate::scene::{Light, Material, Shape};
+use crate::scene::{Material, Shape};
 use crate::schedule::render_with;
 use crate::sequence::Sequence;
 use crate::timeline::{Path as TimelinePath, Timeline};

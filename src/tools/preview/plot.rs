@@ -81,12 +81,10 @@ pub(super) fn keys_and_targets(t: &Timeline) -> (Vec<(DVec3, DVec3)>, Vec<DVec3>
 
 /// Point and spot lights: (index in `lights`, position).
 pub(super) fn positioned_lights(seq: &Sequence) -> Vec<(usize, DVec3)> {
-    let at = |l: &Light| match *l {
-        Light::Point { position, .. } | Light::Spot { position, .. } => Some(position),
-        _ => None,
-    };
     let lights = seq.scene.lights.iter().enumerate();
-    lights.filter_map(|(i, l)| at(l).map(|p| (i, p))).collect()
+    lights
+        .filter_map(|(i, l)| l.position().map(|p| (i, p)))
+        .collect()
 }
 
 /// The box both panels show: the camera path, the keyframes (the last may lie beyond the last
