@@ -391,7 +391,7 @@ fn degenerate_keyframes_give_finite_poses() {
 
 #[test]
 fn an_independent_implementation_of_the_readme_agrees_to_1e_9() {
-    // tests/reference/camera_reference.py follows the README's "Camera motion, exactly" and
+    // tests/reference/camera_reference.py follows docs/spec/timeline.md and
     // wrote these CSV files; rayreel must print the same numbers to 1e-9.
     let dir = scratch("motion-reference");
     for (file, reference) in [

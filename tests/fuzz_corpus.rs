@@ -1,4 +1,4 @@
-//! Replays what the fuzzers (`fuzz/`, see the README) kept: their minimized corpora in
+//! Replays what the fuzzers (`fuzz/`, see CONTRIBUTING.md) kept: their minimized corpora in
 //! `fuzz/corpus/` and the inputs that once crashed them in `tests/fixtures/fuzz/`. No input
 //! may panic or take a second, so a fixed crash stays fixed without libFuzzer or nightly.
 

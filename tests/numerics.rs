@@ -8,7 +8,7 @@
 //!
 //! `cargo test --release --test numerics -- --ignored --nocapture` prints the measured limits
 //! (how far from the origin and over which scale ratio the images stay the same) that the
-//! README's "Numerical robustness" section quotes.
+//! docs/numerics.md quotes.
 
 use glam::DVec3;
 use rayreel::camera::{Camera, screen_point};
@@ -902,7 +902,7 @@ fn talk_translated_by_1e5_matches_the_original() {
 
 #[test]
 fn talk_far_out_and_at_any_scale_matches_the_original() {
-    // The limits the README quotes: features of size 0.1 up to 1e11 from the origin, and any
+    // The limits docs/numerics.md quotes: features of size 0.1 up to 1e11 from the origin, and any
     // uniform scale whose squared lengths stay inside f64 (1e-150 … 1e150).
     for d in [1e7, 1e9, 1e11] {
         let db = talk_psnr(1.0, DVec3::new(d, 0.0, d), (160, 90));
@@ -1295,10 +1295,10 @@ fn every_extreme_sequence_checks_and_renders_finite() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Measurements behind the README's limits (run with --ignored --nocapture).
+// Measurements behind the limits in docs/numerics.md (run with --ignored --nocapture).
 
 #[test]
-#[ignore = "measurement, not a check: prints the limits the README quotes"]
+#[ignore = "measurement, not a check: prints the limits docs/numerics.md quotes"]
 fn measure_limits() {
     for size in [(160, 90), (640, 360)] {
         for d in [1e5, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14] {

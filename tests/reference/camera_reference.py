@@ -1,7 +1,7 @@
-# An independent implementation of the README's "Camera motion, exactly", written from that
-# text, not from rayreel's code: it prints the camera of every frame of a keyframed sequence
-# as `rayreel camera --format csv` does. tests/camera_motion.rs compares the CSV files it wrote
-# (camera_*.csv here) with rayreel to 1e-9.
+# An independent implementation of docs/spec/timeline.md (once the README's "Camera motion,
+# exactly"), written from that text, not from rayreel's code: it prints the camera of every
+# frame of a keyframed sequence as `rayreel camera --format csv` does. tests/camera_motion.rs
+# compares the CSV files it wrote (camera_*.csv here) with rayreel to 1e-9.
 # Usage: python3 camera_reference.py SEQUENCE.yaml > OUT.csv   (needs PyYAML)
 # It differs from rayreel on purpose where the text leaves a choice: it finds the arc-length
 # parameter by bisection rather than Newton steps, and sums in its own order.

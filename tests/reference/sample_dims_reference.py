@@ -1,6 +1,6 @@
-# An independent transcription of the README's "Time and lens coordinates" (The arithmetic,
-# exactly), written from that text: it prints the bits that src/tracer/sample.rs's test
-# time_and_lens_coordinates_are_the_readmes pins. Usage: python3 sample_dims_reference.py
+# An independent transcription of "Time and lens coordinates" in docs/spec/tracer.md (once in
+# the README's "The arithmetic, exactly"), written from that text: it prints the bits that
+# src/tracer/sample.rs's test time_and_lens_coordinates_are_the_readmes pins. Usage: python3 sample_dims_reference.py
 import math, struct
 
 M64 = (1 << 64) - 1; M32 = (1 << 32) - 1

@@ -1,6 +1,7 @@
-# An independent float64 implementation of the tracer conventions in the README ("The tracer"),
-# written from the spec alone, not from rayreel's code. It rendered talk_160x90.png, which
-# tests/render.rs compares with rayreel pixel for pixel.
+# An independent float64 implementation of the tracer conventions of docs/spec/tracer.md
+# ("Conventions"; once the README's "The tracer"), written from the spec alone, not from
+# rayreel's code. It rendered talk_160x90.png, which tests/render.rs compares with rayreel
+# pixel for pixel.
 # Usage: python3 talk_reference.py 160x90   (needs numpy and Pillow; writes ref_160x90.png)
 import math, sys, numpy as np
 from PIL import Image
