@@ -7,7 +7,9 @@
 //! lights:    [ { point: { position: [5, 5, 5], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] } } ]
 //! ```
 
-use glam::DVec3;
+use glam::{DMat3, DVec2, DVec3};
+use std::path::PathBuf;
+use std::sync::Arc;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct Material {
@@ -53,6 +55,107 @@ pub enum Shape {
         point: DVec3,
         normal: DVec3,
     },
+    /// One placement of `Scene::meshes[mesh]` (a file used twice is loaded once).
+    Mesh {
+        mesh: usize,
+        place: Placement,
+        shading: MeshShading,
+    },
+}
+
+/// How a mesh's triangles are shaded (`shading:`); see docs/spec/mesh.md.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MeshShading {
+    /// Vertex normals interpolated by the hit's barycentrics; lighting at the hit.
+    #[default]
+    Phong,
+    /// The face's geometric normal; lighting at the hit.
+    Flat,
+    /// Lighting at the three vertices, colours interpolated by the barycentrics.
+    Gouraud,
+    /// Lighting once at the centroid with the face normal: one colour per triangle.
+    Constant,
+}
+
+impl MeshShading {
+    pub fn name(self) -> &'static str {
+        match self {
+            MeshShading::Phong => "phong",
+            MeshShading::Flat => "flat",
+            MeshShading::Gouraud => "gouraud",
+            MeshShading::Constant => "constant",
+        }
+    }
+}
+
+/// Where a mesh sits: world = translate + rotation · (scale ∘ local).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    pub scale: DVec3,
+    /// Rz · Ry · Rx of the YAML `rotate` (degrees about X, then Y, then Z).
+    pub rotation: DMat3,
+    pub translate: DVec3,
+}
+
+impl Placement {
+    /// A local point in world space: translate + R·(s ∘ p), in that order.
+    pub fn point(&self, p: DVec3) -> DVec3 {
+        self.translate + self.rotation * (self.scale * p)
+    }
+
+    /// A local normal in world space (the inverse transpose: R · (n / s)), unit length.
+    pub fn normal(&self, n: DVec3) -> DVec3 {
+        (self.rotation * (n / self.scale)).normalize()
+    }
+
+    /// The world → local linear map without the translation: (1/s) ∘ Rᵀ.
+    pub fn to_local(&self) -> DMat3 {
+        let rt = self.rotation.transpose();
+        DMat3::from_cols(
+            rt.x_axis / self.scale,
+            rt.y_axis / self.scale,
+            rt.z_axis / self.scale,
+        )
+    }
+}
+
+/// A triangle mesh as read from its file, in the file's own coordinates: shared by every
+/// object that places it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mesh {
+    /// The file, as the sequence names it after resolving against its folder.
+    pub file: PathBuf,
+    pub positions: Vec<DVec3>,
+    /// One unit normal per vertex: the file's where it gives them, else the area-weighted
+    /// average of the normals of the faces around the vertex.
+    pub normals: Vec<DVec3>,
+    /// Texture coordinates per vertex, when the file has them.
+    pub uvs: Option<Vec<DVec2>>,
+    /// Vertex indices of each triangle, in the file's order after fanning polygons.
+    pub triangles: Vec<[u32; 3]>,
+    /// Whether `normals` came from the file.
+    pub file_normals: bool,
+    /// Triangles dropped as degenerate (zero area, a repeated index, a non-finite vertex).
+    pub skipped: usize,
+    /// Notes for `check` (e.g. materials the file names and rayreel ignores).
+    pub notes: Vec<String>,
+    /// FNV-1a 64 of the file's bytes: the fingerprint covers the model's content.
+    pub digest: u64,
+    /// Bytes and seconds the read took, for `check`.
+    pub bytes: u64,
+    pub load_seconds: f64,
+}
+
+impl Mesh {
+    /// The smallest and largest local coordinates of its vertices.
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        self.positions
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            })
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,12 +200,28 @@ pub enum Light {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scene {
     pub objects: Vec<Object>,
+    /// The meshes `Shape::Mesh` objects place, one per distinct file.
+    pub meshes: Vec<Arc<Mesh>>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
     pub background: DVec3,
 }
 
 impl Scene {
+    /// The world box of a placed mesh: its file's box with the eight corners placed.
+    pub fn mesh_bounds(&self, mesh: usize, place: &Placement) -> (DVec3, DVec3) {
+        let (lo, hi) = self.meshes[mesh].bounds();
+        (0..8).fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), k| {
+            let c = DVec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            );
+            let p = place.point(c);
+            (a.min(p), b.max(p))
+        })
+    }
+
     /// The scene in coordinates whose origin is `by` (f32 traces relative to the camera):
     /// positions move by −`by` in f64, and a plane is anchored at its point nearest the new
     /// origin. Directions, colours and radii stay as they are.
@@ -134,6 +253,18 @@ impl Shape {
             Shape::Plane { point, normal } => Shape::Plane {
                 point: closest_to_origin(point - by, normal),
                 normal,
+            },
+            Shape::Mesh {
+                mesh,
+                place,
+                shading,
+            } => Shape::Mesh {
+                mesh,
+                place: Placement {
+                    translate: place.translate - by,
+                    ..place
+                },
+                shading,
             },
         }
     }

@@ -1,6 +1,7 @@
 //! The subcommands: each turns validated arguments into calls down the pipeline.
 
 mod camera;
+mod meshes;
 mod render;
 
 use crate::Error;
@@ -161,7 +162,12 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
         .iter()
         .filter(|o| matches!(o.shape, Shape::Sphere { .. }))
         .count();
-    let planes = scene.objects.len() - spheres;
+    let placed = scene
+        .objects
+        .iter()
+        .filter(|o| matches!(o.shape, Shape::Mesh { .. }))
+        .count();
+    let planes = scene.objects.len() - spheres - placed;
     let mut kinds = [0usize; 4];
     for l in &scene.lights {
         kinds[match l {
@@ -194,10 +200,16 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
     };
     let s = &seq.settings;
     format!(
-        "{file}: ok\n  objects:    {} ({}, {})\n  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {} at {} fps ({} s{}), {camera}\n{}{}  output:     {}\n",
+        "{file}: ok\n  objects:    {} ({}, {}{})\n{}  materials:  {}\n  lights:     {} ({})\n  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {} at {} fps ({} s{}), {camera}\n{}{}  output:     {}\n",
         scene.objects.len(),
         noun(spheres as f64, "sphere"),
         noun(planes as f64, "plane"),
+        match placed {
+            0 => String::new(),
+            1 => ", 1 mesh".to_string(),
+            n => format!(", {n} meshes"),
+        },
+        meshes::summary(scene),
         scene.materials.len(),
         scene.lights.len(),
         if light_list.is_empty() {

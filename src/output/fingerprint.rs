@@ -194,12 +194,28 @@ fn tagged(h: &mut Hasher, tag: u8, fields: &[&dyn Canon]) {
     fields.iter().for_each(|f| f.canon(h));
 }
 
-canon_struct!(Scene {
-    objects,
-    materials,
-    lights,
-    background,
-});
+/// A scene without meshes encodes exactly as before meshes existed; with them, each mesh's
+/// content (the digest of its file's bytes) follows, so a changed model makes frames stale.
+impl Canon for Scene {
+    fn canon(&self, h: &mut Hasher) {
+        let Scene {
+            objects,
+            meshes,
+            materials,
+            lights,
+            background,
+        } = self;
+        objects.canon(h);
+        materials.canon(h);
+        lights.canon(h);
+        background.canon(h);
+        if !meshes.is_empty() {
+            h.write(b"meshes");
+            meshes.len().canon(h);
+            meshes.iter().for_each(|m| m.digest.canon(h));
+        }
+    }
+}
 
 impl Canon for Object {
     fn canon(&self, h: &mut Hasher) {
@@ -207,6 +223,16 @@ impl Canon for Object {
         match shape {
             Shape::Sphere { center, radius } => tagged(h, 0, &[center, radius]),
             Shape::Plane { point, normal } => tagged(h, 1, &[point, normal]),
+            Shape::Mesh {
+                mesh,
+                place,
+                shading,
+            } => {
+                let r = place.rotation;
+                let rotation = [r.x_axis, r.y_axis, r.z_axis];
+                let shading = *shading as u32;
+                tagged(h, 2, &[mesh, &place.scale, &rotation, &place.translate, &shading])
+            }
         }
         material.canon(h);
     }

@@ -8,6 +8,8 @@
 mod fields;
 mod guard;
 mod locate;
+pub mod mesh;
+mod meshes;
 mod messages;
 pub mod raw;
 mod scene;
@@ -232,12 +234,16 @@ pub fn parse_drawable(file: &Path, text: &str) -> Result<(Sequence, Option<LoadE
             message,
         }
     };
-    let (seq, problem) = validate(raw, &name).map_err(located)?;
+    let base = match is_stdin(file) {
+        true => Path::new(""),
+        false => file.parent().unwrap_or(Path::new("")),
+    };
+    let (seq, problem) = validate(raw, &name, base).map_err(located)?;
     Ok((seq, problem.map(located)))
 }
 
 /// The sequence, and the first key or frame whose camera cannot be built (see `load_drawable`).
-fn validate(raw: raw::Sequence, name: &str) -> Check<(Sequence, Option<Invalid>)> {
+fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Option<Invalid>)> {
     let settings = render_settings(&raw.render)?;
     let background = color(
         "render.background",
@@ -258,9 +264,12 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<(Sequence, Option<Invalid>)
             ),
         );
     }
+    let mut meshes = meshes::Meshes::new(base);
     for (i, o) in raw.objects.iter().enumerate() {
-        objects.push(object(&format!("objects[{i}]"), o, &names, &mut materials)?);
+        let path = format!("objects[{i}]");
+        objects.push(object(&path, o, &names, &mut materials, &mut meshes)?);
     }
+    let (meshes, mut warnings) = meshes.finish();
     let mut lights = Vec::new();
     for (i, l) in raw.lights.iter().enumerate() {
         lights.push(light(&format!("lights[{i}]"), l)?);
@@ -280,6 +289,7 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<(Sequence, Option<Invalid>)
         name: name.to_string(),
         scene: Scene {
             objects,
+            meshes,
             materials,
             lights,
             background,
@@ -305,7 +315,10 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<(Sequence, Option<Invalid>)
         },
         quality: raw.render.quality,
         timeline,
-        warnings: loaded.warnings,
+        warnings: {
+            warnings.extend(loaded.warnings);
+            warnings
+        },
     };
     Ok((seq, loaded.problem))
 }

@@ -188,6 +188,33 @@ impl<'de> Deserialize<'de> for MaterialRef {
 pub struct Object {
     pub sphere: Option<Sphere>,
     pub plane: Option<Plane>,
+    pub mesh: Option<Mesh>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mesh {
+    pub file: String,
+    pub material: MaterialRef,
+    pub shading: Option<crate::scene::MeshShading>,
+    pub scale: Option<Scale>,
+    pub rotate: Option<V3>,
+    pub translate: Option<V3>,
+}
+
+/// A mesh's `scale`: one number for every axis (`2`) or a triple.
+#[derive(Debug, Clone, Copy)]
+pub struct Scale(pub V3);
+
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Filter::deserialize(d).map(|Filter(v)| Scale(v)).map_err(|e| {
+            de::Error::custom(
+                e.to_string()
+                    .replace("a number in [0, 1] or a colour triple [r, g, b]", "a number or a triple [x, y, z]"),
+            )
+        })
+    }
 }
 
 #[derive(Debug, Deserialize)]

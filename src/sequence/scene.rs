@@ -128,14 +128,24 @@ pub(super) fn object(
     o: &raw::Object,
     names: &[&str],
     materials: &mut Vec<Material>,
+    meshes: &mut super::meshes::Meshes,
 ) -> Check<Object> {
     let which = exactly_one(
         path,
         &[
             ("sphere", o.sphere.as_ref().map(|_| 0)),
             ("plane", o.plane.as_ref().map(|_| 1)),
+            ("mesh", o.mesh.as_ref().map(|_| 2)),
         ],
     )?;
+    if which == 2 {
+        let m = o.mesh.as_ref().expect("checked");
+        let p = format!("{path}.mesh");
+        return Ok(Object {
+            shape: meshes.place(&p, m)?,
+            material: material_ref(&format!("{p}.material"), &m.material, names, materials)?,
+        });
+    }
     if which == 0 {
         let s = o.sphere.as_ref().expect("checked");
         let p = format!("{path}.sphere");

@@ -10,11 +10,14 @@
 //! lane width gives the same hit.
 
 use super::intersect::{Hit, Ray, plane_hit, sphere_hit};
-use super::lanes::{F64x1, Lanes, Mask};
+use super::bvh::Bvh;
+use super::lanes::{F64x1, Lanes, MAX_LANES, Mask};
+use super::mesh::{Best, Instance, NO_TRIANGLE};
 use super::vec3::V3;
 use crate::scene::{Object, Shape, closest_to_origin};
 use glam::DVec3;
 use std::ops::Range;
+use std::sync::Arc;
 
 /// Below this many spheres a plain loop beats any hierarchy (measured with `rayreel bench`).
 pub const BVH_MIN_SPHERES: usize = 12;
@@ -26,6 +29,8 @@ pub struct Geometry {
     spheres: Vec<Ball>,
     planes: Vec<Flat>,
     bvh: Vec<Node>,
+    /// Placed meshes, tested after spheres and planes.
+    meshes: Vec<Instance>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -74,23 +79,31 @@ pub struct FromOrigin {
     c: f64,
 }
 
-/// The nearest hit of each lane: `hit` lanes have `t` and `object` (an index, as a float).
+/// The nearest hit of each lane: `hit` lanes have `t` and `object` (an index, as a float);
+/// lanes that hit a mesh also have the triangle (`prim`, else `NO_TRIANGLE`) and the
+/// barycentric weights `u`, `v` of its second and third vertex.
 #[derive(Clone, Copy)]
 pub struct Nearest<V: Lanes> {
     pub hit: V::M,
     pub t: V,
     pub object: V,
+    pub u: V,
+    pub v: V,
+    pub prim: [u32; MAX_LANES],
 }
 
 impl Geometry {
+    /// The geometry of spheres and planes (a mesh-free scene).
     pub fn new(objects: &[Object]) -> Geometry {
-        Geometry::subset(objects, |_| true)
+        Geometry::subset(objects, &[], |_| true)
     }
 
-    /// The geometry of the objects `keep` accepts, under their indices in `objects`.
-    pub fn subset(objects: &[Object], keep: impl Fn(usize) -> bool) -> Geometry {
+    /// The geometry of the objects `keep` accepts, under their indices in `objects`; `bvhs`
+    /// holds the hierarchy of each of the scene's meshes.
+    pub fn subset(objects: &[Object], bvhs: &[Arc<Bvh>], keep: impl Fn(usize) -> bool) -> Geometry {
         let mut spheres = Vec::new();
         let mut planes = Vec::new();
+        let mut meshes = Vec::new();
         for (i, o) in objects.iter().enumerate().filter(|(i, _)| keep(*i)) {
             let object = i as u32;
             match o.shape {
@@ -105,6 +118,9 @@ impl Geometry {
                     normal,
                     object,
                 }),
+                Shape::Mesh { mesh, place, .. } => {
+                    meshes.push(Instance::new(i, bvhs[mesh].clone(), &place))
+                }
             }
         }
         let mut bvh = Vec::new();
@@ -123,6 +139,7 @@ impl Geometry {
             spheres,
             planes,
             bvh,
+            meshes,
         }
     }
 
@@ -163,6 +180,7 @@ impl Geometry {
             spheres,
             planes,
             bvh,
+            meshes: self.meshes.iter().map(|m| m.shifted(by, pad)).collect(),
         }
     }
 
@@ -228,11 +246,44 @@ impl Geometry {
             t = V::select(better, tp, t);
             object = V::select(better, V::splat(f64::from(p.object)), object);
         }
-        Nearest {
-            hit: active.and(t.lt(V::splat(f64::INFINITY))),
+        let mut best = Best {
             t,
             object,
+            u: V::splat(0.0),
+            v: V::splat(0.0),
+            prim: [NO_TRIANGLE; MAX_LANES],
+        };
+        if !self.meshes.is_empty() {
+            let slabs = Slabs::new(rays, active);
+            for m in &self.meshes {
+                let enter = m.entered(&slabs, best.t, active);
+                if enter.any() {
+                    m.nearest(rays, enter, &mut best);
+                }
+            }
         }
+        Nearest {
+            hit: active.and(best.t.lt(V::splat(f64::INFINITY))),
+            t: best.t,
+            object: best.object,
+            u: best.u,
+            v: best.v,
+            prim: best.prim,
+        }
+    }
+
+    /// The lanes of `open` blocked by a mesh before `max_t`.
+    #[inline(always)]
+    fn mesh_blocked<V: Lanes>(&self, rays: &Rays<V>, max_t: V, open: V::M) -> V::M {
+        let slabs = Slabs::new(rays, open);
+        let mut blocked = V::M::none_set();
+        for m in &self.meshes {
+            let enter = m.entered(&slabs, max_t, open.andnot(blocked));
+            if enter.any() {
+                blocked = blocked.or(m.blocked(rays, max_t, enter));
+            }
+        }
+        blocked
     }
 
     /// The `active` lanes with something on their ray strictly before `max_t`.
@@ -257,7 +308,15 @@ impl Geometry {
         } else {
             self.walk(rays, &mut search);
         }
+        if !self.meshes.is_empty() && search.open.any() {
+            search.open = search.open.andnot(self.mesh_blocked(rays, max_t, search.open));
+        }
         active.andnot(search.open)
+    }
+
+    /// Whether any mesh is placed.
+    pub fn has_meshes(&self) -> bool {
+        !self.meshes.is_empty()
     }
 
     #[inline(always)]
@@ -432,7 +491,7 @@ fn plane<V: Lanes>(p: &Flat, rays: &Rays<V>, active: V::M) -> (V::M, V) {
 /// What the box tests of one walk share: each lane's origin and reciprocal direction, and
 /// per axis whether every searching lane runs the same way along it (then the near and far
 /// planes of a box are known without comparing).
-struct Slabs<V: Lanes> {
+pub(super) struct Slabs<V: Lanes> {
     origin: V3<V>,
     inv: V3<V>,
     /// Per axis: Some(true) when every lane's direction is negative, Some(false) when every
@@ -442,7 +501,7 @@ struct Slabs<V: Lanes> {
 
 impl<V: Lanes> Slabs<V> {
     #[inline(always)]
-    fn new(rays: &Rays<V>, lanes: V::M) -> Slabs<V> {
+    pub(super) fn new(rays: &Rays<V>, lanes: V::M) -> Slabs<V> {
         let inv = V3 {
             x: inverse(rays.dir.x),
             y: inverse(rays.dir.y),
@@ -464,6 +523,19 @@ impl<V: Lanes> Slabs<V> {
     /// The lanes whose ray enters the node's box at or before their `limit`.
     #[inline(always)]
     fn entry(&self, node: &Node, limit: V) -> V::M {
+        self.enters(node.min, node.max, limit)
+    }
+
+    /// The lanes whose ray enters the box [min, max] at or before their `limit`.
+    #[inline(always)]
+    pub(super) fn enters(&self, min: DVec3, max: DVec3, limit: V) -> V::M {
+        let node = Node {
+            min,
+            max,
+            first: 0,
+            count: 0,
+            axis: 0,
+        };
         let (x0, x1) = slab(
             node.min.x,
             node.max.x,

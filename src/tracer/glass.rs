@@ -10,33 +10,42 @@
 use super::World;
 use super::accel::Rays;
 use super::intersect::{plane_hit, sphere_hit};
+use super::bvh::Bvh;
 use super::lanes::{F64x1, Lanes, MAX_LANES, Mask};
+use super::mesh::Instance;
 use super::shade::{Eye, NEGLIGIBLE_WEIGHT, Shaded, powi, shade_hit};
 use super::vec3::V3;
 use crate::scene::{Material, Object, Shape};
 use glam::DVec3;
+use std::sync::Arc;
 
 /// An object light passes through, for shadow rays.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Clear {
     shape: Shape,
     /// r² for a sphere, as the intersection forms it.
     r2: f64,
     object: f64,
     filter: DVec3,
+    /// A mesh's placement.
+    mesh: Option<Instance>,
 }
 
 impl Clear {
-    pub fn new(o: &Object, index: usize, filter: DVec3) -> Clear {
-        let r2 = match o.shape {
-            Shape::Sphere { radius, .. } => radius * radius,
-            Shape::Plane { .. } => 0.0,
+    pub fn new(o: &Object, index: usize, filter: DVec3, bvhs: &[Arc<Bvh>]) -> Clear {
+        let (r2, mesh) = match o.shape {
+            Shape::Sphere { radius, .. } => (radius * radius, None),
+            Shape::Plane { .. } => (0.0, None),
+            Shape::Mesh { mesh, place, .. } => {
+                (0.0, Some(Instance::new(index, bvhs[mesh].clone(), &place)))
+            }
         };
         Clear {
             shape: o.shape,
             r2,
             object: index as f64,
             filter,
+            mesh,
         }
     }
 }
@@ -67,8 +76,15 @@ pub(super) fn transmittance<V: Lanes>(
                 own,
                 open,
             ),
+            Shape::Mesh { .. } => {
+                let m = c.mesh.as_ref().expect("a mesh's placement");
+                (m.blocked(shadow, dist, open), dist)
+            }
         };
-        let crossed = hit.and(t.lt(dist));
+        let crossed = hit.and(t.lt(dist)).or(match c.shape {
+            Shape::Mesh { .. } => hit,
+            _ => V::M::none_set(),
+        });
         if crossed.any() {
             through = V3::select(crossed, through * V3::splat(c.filter), through);
         }
@@ -240,7 +256,7 @@ pub(super) fn trace_tree<V: Lanes>(
             }
             let split = scatter(&Optics::of(&at), b.rays.dir, at.normal, at.entering);
             let transmitted = Rays {
-                origin: at.point,
+                origin: at.leave(split.refracted),
                 dir: split.refracted,
                 leaving: hit.object,
             };

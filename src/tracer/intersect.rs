@@ -107,6 +107,8 @@ pub fn intersect(shape: &Shape, ray: &Ray, own: bool) -> Option<f64> {
         Shape::Plane { point, normal } => {
             plane_hit(V3::splat(point), V3::splat(normal), o, d, own, true)
         }
+        // Meshes need their file's triangles: `accel::Geometry` tests them.
+        Shape::Mesh { .. } => return None,
     };
     hit.then_some(t.0)
 }

@@ -6,14 +6,18 @@
 //! count, order of work or lane width.
 
 pub mod accel;
+pub mod bvh;
 pub mod glass;
 pub mod intersect;
 pub mod kernel;
 pub mod lanes;
+pub mod mesh;
+mod polygon;
 pub mod precision;
 mod rows;
 pub mod sample;
 pub mod shade;
+pub mod triangle;
 pub mod vec3;
 
 use crate::frame::Frame;
@@ -24,6 +28,7 @@ use glam::DVec3;
 pub use kernel::Kernel;
 use rayon::prelude::*;
 use rows::{Pass, Planes, RowOut, RowStats};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What decides a frame besides the scene and the camera.
@@ -120,22 +125,41 @@ pub struct World {
     clear: Vec<glass::Clear>,
     /// Some material spawns more than one ray (or reflects by angle): paths are trees.
     branches: bool,
+    /// The hierarchy of each of `scene.meshes`, built once and shared by every placement.
+    bvhs: Vec<Arc<bvh::Bvh>>,
 }
 
 impl World {
     pub fn new(scene: Scene) -> World {
-        let geometry = accel::Geometry::new(&scene.objects);
+        let bvhs: Vec<Arc<bvh::Bvh>> = scene
+            .meshes
+            .iter()
+            .map(|m| Arc::new(bvh::Bvh::build(m)))
+            .collect();
+        let geometry = accel::Geometry::subset(&scene.objects, &bvhs, |_| true);
         let material = |i: usize| &scene.materials[scene.objects[i].material];
-        let clear = clear(&scene);
-        let opaque = (!clear.is_empty())
-            .then(|| accel::Geometry::subset(&scene.objects, |i| !material(i).transparent()));
+        let clear = clear(&scene, &bvhs);
+        let opaque = (!clear.is_empty()).then(|| {
+            accel::Geometry::subset(&scene.objects, &bvhs, |i| !material(i).transparent())
+        });
         World {
             branches: scene.materials.iter().any(|m| m.branches()),
             scene,
             geometry,
             opaque,
             clear,
+            bvhs,
         }
+    }
+
+    /// Whether some object is a mesh (shading then lifts secondary rays off triangles).
+    pub fn has_meshes(&self) -> bool {
+        !self.bvhs.is_empty()
+    }
+
+    /// The hierarchy of `scene.meshes[i]` (for `check` and `bench`).
+    pub fn bvh(&self, i: usize) -> &bvh::Bvh {
+        &self.bvhs[i]
     }
 
     /// This world in coordinates whose origin is `by` (see `Scene::shifted`), its boxes
@@ -144,11 +168,12 @@ impl World {
         const PAD: f64 = 1.0 / 65536.0;
         let scene = self.scene.shifted(by);
         World {
-            clear: clear(&scene),
+            clear: clear(&scene, &self.bvhs),
             scene,
             geometry: self.geometry.shifted(by, PAD),
             opaque: self.opaque.as_ref().map(|g| g.shifted(by, PAD)),
             branches: self.branches,
+            bvhs: self.bvhs.clone(),
         }
     }
 
@@ -164,11 +189,11 @@ impl World {
 }
 
 /// The objects of `scene` that let light through, in file order.
-fn clear(scene: &Scene) -> Vec<glass::Clear> {
+fn clear(scene: &Scene, bvhs: &[Arc<bvh::Bvh>]) -> Vec<glass::Clear> {
     let material = |i: usize| &scene.materials[scene.objects[i].material];
     (0..scene.objects.len())
         .filter(|&i| material(i).transparent())
-        .map(|i| glass::Clear::new(&scene.objects[i], i, material(i).transmission))
+        .map(|i| glass::Clear::new(&scene.objects[i], i, material(i).transmission, bvhs))
         .collect()
 }
 

@@ -68,6 +68,12 @@ pub fn f32_limit(scene: &Scene, camera: &Camera, settings: &Settings) -> Option<
             Shape::Plane { point, normal } => {
                 ((point - camera.origin).dot(normal).abs(), "plane", 1.0)
             }
+            // A mesh: its farthest box corner; its smallest scale factor must square in f32.
+            Shape::Mesh { mesh, place, .. } => {
+                let (lo, hi) = scene.mesh_bounds(mesh, &place);
+                let far = (lo - camera.origin).abs().max((hi - camera.origin).abs());
+                (far.length(), "mesh", place.scale.abs().min_element())
+            }
         };
         let pixels = match reach <= LARGEST && radius >= SMALLEST {
             true => U * reach * per_length,

@@ -10,6 +10,7 @@ use super::World;
 use super::accel::{FromOrigin, Nearest, Rays};
 use super::intersect::Ray;
 use super::lanes::{F64x1, Lanes, MAX_LANES, Mask};
+use super::polygon::MeshLanes;
 use super::vec3::V3;
 use crate::scene::{Light, Material, Shape};
 use glam::DVec3;
@@ -95,10 +96,27 @@ pub fn trace_packet<V: Lanes>(
     (color, covered)
 }
 
+/// How far, and along which normal, rays leaving a mesh start off its surface (see
+/// `polygon::lift_distance`): `normal` faces the incoming ray, `delta` is 0 on other lanes.
+pub(super) struct Lift<V: Lanes> {
+    pub normal: V3<V>,
+    pub delta: V,
+}
+
+impl<V: Lanes> Lift<V> {
+    /// `point` moved δ along the normal to the side `dir` leaves to: +δ when normal·dir ≥ 0.
+    #[inline(always)]
+    pub(super) fn origin(&self, point: V3<V>, dir: V3<V>) -> V3<V> {
+        point + self.normal * self.delta.copysign(self.normal.dot(dir))
+    }
+}
+
 /// A packet's hits, shaded: what the rays see there, and what the path needs to go on.
 pub(super) struct Shaded<'a, V: Lanes> {
     pub surface: Surface<'a, V>,
     pub point: V3<V>,
+    /// Set when a lane hit a mesh: rays leaving the hits start from `leave`.
+    pub lift: Option<Lift<V>>,
     /// The unit normal, turned to face the incoming ray.
     pub normal: V3<V>,
     /// Lanes whose ray meets the surface from outside (its outward normal faces the ray).
@@ -117,13 +135,43 @@ pub(super) fn shade_hit<'a, V: Lanes>(
 ) -> Shaded<'a, V> {
     let surface = Surface::gather(world, hit);
     let point = ray.origin + ray.dir * hit.t;
-    let (normal, entering) = surface.normal(point, ray.dir);
-    let local = local(
-        world, &surface, point, normal, ray.dir, hit.object, hit.hit, rays,
-    );
+    let (mut normal, mut entering) = surface.normal(point, ray.dir);
+    let mesh = match world.has_meshes() {
+        true => MeshLanes::of(world, hit, point),
+        false => None,
+    };
+    let mut lift = None;
+    let mut here = hit.hit;
+    if let Some(m) = &mesh {
+        let at = m.facing(ray.dir, normal, entering);
+        (normal, entering, lift, here) = (at.0, at.1, Some(at.2), here.andnot(m.elsewhere()));
+    }
+    // Station 0 lights the hit; on `gouraud` and `constant` lanes stations 1–3 light the
+    // vertices and 4 the centroid (`polygon`). One call of `local` keeps the kernels small.
+    let stations = match &mesh {
+        Some(m) if m.elsewhere().any() => 5,
+        _ => 1,
+    };
+    let mut lit = [V3::zero(); 5];
+    for (station, out) in lit.iter_mut().enumerate().take(stations) {
+        let (lanes, p, n, l) = match (station, &mesh, &lift) {
+            (1.., Some(m), Some(l)) => m.station(station - 1, ray.dir, l),
+            _ => (here, point, normal, None),
+        };
+        if !lanes.any() {
+            continue;
+        }
+        let l = l.as_ref().or(lift.as_ref());
+        *out = local(world, &surface, p, n, ray.dir, hit.object, lanes, l, rays);
+    }
+    let local = match &mesh {
+        Some(m) if stations > 1 => m.mixed(&lit),
+        _ => lit[0],
+    };
     Shaded {
         surface,
         point,
+        lift,
         normal,
         entering,
         local,
@@ -136,10 +184,20 @@ impl<V: Lanes> Shaded<'_, V> {
     pub(super) fn reflected(&self, ray: &Rays<V>, hit: &Nearest<V>) -> Rays<V> {
         let n = self.normal;
         let bounce = ray.dir - n * (V::splat(2.0) * ray.dir.dot(n));
+        let dir = bounce.normalize();
         Rays {
-            origin: self.point,
-            dir: bounce.normalize(),
+            origin: self.leave(dir),
+            dir,
             leaving: hit.object,
+        }
+    }
+
+    /// Where rays leaving the hits along `dir` start: the hit point, lifted off meshes.
+    #[inline(always)]
+    pub(super) fn leave(&self, dir: V3<V>) -> V3<V> {
+        match &self.lift {
+            None => self.point,
+            Some(l) => l.origin(self.point, dir),
         }
     }
 }
@@ -222,7 +280,7 @@ impl<'a, V: Lanes> Surface<'a, V> {
     /// The unit normal at `point`, turned to face the incoming ray, and the lanes whose ray
     /// comes from outside (a sphere's outside, a plane's front).
     #[inline(always)]
-    fn normal(&self, point: V3<V>, dir: V3<V>) -> (V3<V>, V::M) {
+    pub(super) fn normal(&self, point: V3<V>, dir: V3<V>) -> (V3<V>, V::M) {
         let sphere = (point - self.center).normalize();
         let n = V3::select(self.is_plane, self.plane_normal, sphere);
         let inside = n.dot(dir).gt(V::splat(0.0));
@@ -246,13 +304,16 @@ fn anchor(shape: Shape) -> (DVec3, DVec3, bool) {
     match shape {
         Shape::Sphere { center, .. } => (center, DVec3::ZERO, false),
         Shape::Plane { normal, .. } => (DVec3::ZERO, normal, true),
+        // Replaced by the triangle's normals (`polygon`); a plane's form avoids a division.
+        Shape::Mesh { .. } => (DVec3::ZERO, DVec3::Y, true),
     }
 }
 
-/// Sum over the lights of the Blinn-Phong terms at one surface point per lane.
+/// Sum over the lights of the Blinn-Phong terms at one surface point per lane; shadow rays
+/// start at `point`, or lifted off a mesh by `lift`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn local<V: Lanes>(
+pub(super) fn local<V: Lanes>(
     world: &World,
     s: &Surface<V>,
     point: V3<V>,
@@ -260,6 +321,7 @@ fn local<V: Lanes>(
     dir: V3<V>,
     object: V,
     active: V::M,
+    lift: Option<&Lift<V>>,
     rays: &mut u64,
 ) -> V3<V> {
     let mut sum = V3::zero();
@@ -311,9 +373,13 @@ fn local<V: Lanes>(
             continue;
         }
         *rays += facing.count();
+        let towards = to_light.normalize();
         let shadow = Rays {
-            origin: point,
-            dir: to_light.normalize(),
+            origin: match lift {
+                None => point,
+                Some(l) => l.origin(point, towards),
+            },
+            dir: towards,
             leaving: object,
         };
         let open = facing.andnot(world.blockers().occluded(&shadow, distance, facing));

@@ -114,6 +114,8 @@ pub(super) fn inside_objects(seq: &Sequence, positions: &[DVec3]) -> Vec<(String
                     .collect(),
                 format!("the camera is behind objects[{i}] (plane), against its normal"),
             ),
+            // A mesh need not be closed: being inside its box says nothing.
+            Shape::Mesh { .. } => continue,
         };
         if flags.contains(&true) {
             out.push((what, flags));
@@ -183,7 +185,7 @@ pub(super) fn huge_spheres(seq: &Sequence, samples: &[(u64, Pose)]) -> Vec<bool>
     let size = reach.size().length().max(f64::MIN_POSITIVE);
     let huge = |o: &crate::scene::Object| match o.shape {
         Shape::Sphere { radius, .. } => radius > HUGE_SPHERE * size,
-        Shape::Plane { .. } => false,
+        Shape::Plane { .. } | Shape::Mesh { .. } => false,
     };
     seq.scene.objects.iter().map(huge).collect()
 }

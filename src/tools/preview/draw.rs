@@ -40,6 +40,21 @@ pub(super) fn draw_solids(c: &mut Canvas, p: &Panel, seq: &Sequence, plot: &Plot
                 edge,
             ),
             Shape::Sphere { .. } => {}
+            Shape::Mesh { mesh, place, .. } => {
+                // A mesh as the outline of its placed box, seen along the panel's depth axis.
+                let (lo, hi) = seq.scene.mesh_bounds(mesh, &place);
+                let (a, b) = (p.to_px(lo), p.to_px(hi));
+                let (x0, x1) = (a.0.min(b.0), a.0.max(b.0));
+                let (y0, y1) = (a.1.min(b.1), a.1.max(b.1));
+                for (from, to) in [
+                    ((x0, y0), (x1, y0)),
+                    ((x1, y0), (x1, y1)),
+                    ((x1, y1), (x0, y1)),
+                    ((x0, y1), (x0, y0)),
+                ] {
+                    c.line(from, to, 1.5, edge);
+                }
+            }
         }
     }
 }

@@ -100,6 +100,11 @@ pub(super) fn fit(seq: &Sequence, plot: &Plot) -> Bounds {
             core.add(center - DVec3::splat(radius));
             core.add(center + DVec3::splat(radius));
         }
+        if let Shape::Mesh { mesh, place, .. } = o.shape {
+            let (lo, hi) = seq.scene.mesh_bounds(mesh, &place);
+            core.add(lo);
+            core.add(hi);
+        }
     }
     // A still camera with nothing around it still needs a size: its distance to the target.
     let first = plot.samples[0].1;

@@ -1,0 +1,196 @@
+//! `mesh:` objects: the file resolved against the sequence file's folder (and kept inside
+//! it), read once however often it is placed, and its placement checked.
+//!
+//! ```yaml
+//! - mesh: { file: models/bunny.ply, material: clay, shading: phong, scale: 10, rotate: [0, 30, 0], translate: [0, -1, 0] }
+//! ```
+
+use super::*;
+use crate::scene::{Mesh, Placement};
+use glam::DMat3;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+pub(super) struct Meshes {
+    base: PathBuf,
+    loaded: Vec<Arc<Mesh>>,
+    by_path: HashMap<PathBuf, usize>,
+    warnings: Vec<String>,
+}
+
+impl Meshes {
+    pub(super) fn new(base: &Path) -> Meshes {
+        Meshes {
+            base: base.to_owned(),
+            loaded: Vec::new(),
+            by_path: HashMap::new(),
+            warnings: Vec::new(),
+        }
+    }
+
+    /// The meshes in order of first use, and a warning per file that lost triangles.
+    pub(super) fn finish(self) -> (Vec<Arc<Mesh>>, Vec<String>) {
+        (self.loaded, self.warnings)
+    }
+
+    /// Reads (or reuses) the file of `m` and checks its placement.
+    pub(super) fn place(&mut self, path: &str, m: &raw::Mesh) -> Check<Shape> {
+        let field = format!("{path}.file");
+        let file = self.resolve(&field, &m.file)?;
+        let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
+        let index = match self.by_path.get(&key) {
+            Some(&i) => i,
+            None => {
+                let mesh = super::mesh::load(&file).or_else(|e| invalid(&field, e.to_string()))?;
+                if mesh.skipped > 0 {
+                    self.warnings.push(format!(
+                        "{field}: {} of {} triangles of {} are degenerate (zero area, a repeated index or a non-finite vertex) and were skipped",
+                        mesh.skipped,
+                        mesh.skipped + mesh.triangles.len(),
+                        m.file
+                    ));
+                }
+                self.loaded.push(Arc::new(mesh));
+                self.by_path.insert(key, self.loaded.len() - 1);
+                self.loaded.len() - 1
+            }
+        };
+        let place = placement(path, m)?;
+        check_reach(path, &place, &self.loaded[index])?;
+        Ok(Shape::Mesh {
+            mesh: index,
+            place,
+            shading: m.shading.unwrap_or_default(),
+        })
+    }
+
+    /// `file` against the sequence file's folder; like `output`, a sequence file may only
+    /// reach below its own folder (no absolute path, no `..`, no link leading out).
+    fn resolve(&self, field: &str, file: &str) -> Check<PathBuf> {
+        let p = Path::new(file);
+        let climbs = p
+            .components()
+            .any(|c| matches!(c, std::path::Component::ParentDir));
+        if file.is_empty() || p.is_absolute() || climbs || file.starts_with('~') {
+            return invalid(
+                field,
+                format!(
+                    "a mesh file must be a relative path below the sequence file's folder, without `..` (got `{file}`); copy or link the model there"
+                ),
+            );
+        }
+        let full = self.base.join(p);
+        let base = std::fs::canonicalize(if self.base.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            &self.base
+        });
+        if let (Ok(base), Ok(real)) = (base, std::fs::canonicalize(&full))
+            && !real.starts_with(&base)
+        {
+            return invalid(
+                field,
+                format!(
+                    "`{file}` leads outside the sequence file's folder once symbolic links are followed (to {}); copy the model there",
+                    real.display()
+                ),
+            );
+        }
+        Ok(full)
+    }
+}
+
+fn placement(path: &str, m: &raw::Mesh) -> Check<Placement> {
+    let scale = match m.scale {
+        None => DVec3::ONE,
+        Some(raw::Scale(v)) => vector(&format!("{path}.scale"), v)?,
+    };
+    if scale.abs().min_element() < MIN_SCALE {
+        return invalid(
+            format!("{path}.scale"),
+            format!(
+                "each factor must be non-zero, at least {MIN_SCALE:e} in size {}",
+                got(num3(scale))
+            ),
+        );
+    }
+    let rotate = vector(&format!("{path}.rotate"), m.rotate.unwrap_or_default())?;
+    Ok(Placement {
+        scale,
+        rotation: rotation(rotate),
+        translate: vector(&format!("{path}.translate"), m.translate.unwrap_or_default())?,
+    })
+}
+
+/// The smallest scale factor accepted: scaled coordinates must stay normal f64 numbers.
+const MIN_SCALE: f64 = 1e-100;
+
+/// Rz · Ry · Rx for angles in degrees, right-handed (counter-clockwise seen from the positive
+/// axis). Whole multiples of 90° use exact 0 and ±1, so axis-aligned models stay aligned.
+pub fn rotation(degrees: DVec3) -> DMat3 {
+    let (sx, cx) = sin_cos(degrees.x);
+    let (sy, cy) = sin_cos(degrees.y);
+    let (sz, cz) = sin_cos(degrees.z);
+    let rx = DMat3::from_cols(
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(0.0, cx, sx),
+        DVec3::new(0.0, -sx, cx),
+    );
+    let ry = DMat3::from_cols(
+        DVec3::new(cy, 0.0, -sy),
+        DVec3::new(0.0, 1.0, 0.0),
+        DVec3::new(sy, 0.0, cy),
+    );
+    let rz = DMat3::from_cols(
+        DVec3::new(cz, sz, 0.0),
+        DVec3::new(-sz, cz, 0.0),
+        DVec3::new(0.0, 0.0, 1.0),
+    );
+    rz * (ry * rx)
+}
+
+/// sin and cos of an angle in degrees: exact at whole multiples of 90°, else libm's of the
+/// angle (reduced to (−360, 360) by `%`) times π/180.
+fn sin_cos(degrees: f64) -> (f64, f64) {
+    let d = degrees % 360.0;
+    if d % 90.0 == 0.0 {
+        let quarter = ((d / 90.0) as i64).rem_euclid(4);
+        return [(0.0, 1.0), (1.0, 0.0), (0.0, -1.0), (-1.0, 0.0)][quarter as usize];
+    }
+    let r = d.to_radians();
+    (libm::sin(r), libm::cos(r))
+}
+
+/// The placed model must stay within the coordinates every other object may have.
+fn check_reach(path: &str, place: &Placement, mesh: &Mesh) -> Check<()> {
+    let (lo, hi) = mesh.bounds();
+    let far = place.translate.abs().max_element()
+        + (place.scale.abs().max_element() * lo.abs().max(hi.abs()).max_element()) * 3f64.sqrt();
+    if !(far <= MAX_MAGNITUDE) {
+        return invalid(
+            format!("{path}.scale"),
+            format!(
+                "the placed model reaches {} from the origin; coordinates are limited to ±{MAX_MAGNITUDE:e}",
+                num(far)
+            ),
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rotations_are_right_handed_and_exact_at_quarter_turns() {
+        // 90° about Y takes +Z to +X; 90° about X takes +Y to +Z; about Z takes +X to +Y.
+        assert_eq!(rotation(DVec3::new(0.0, 90.0, 0.0)) * DVec3::Z, DVec3::X);
+        assert_eq!(rotation(DVec3::new(90.0, 0.0, 0.0)) * DVec3::Y, DVec3::Z);
+        assert_eq!(rotation(DVec3::new(0.0, 0.0, 90.0)) * DVec3::X, DVec3::Y);
+        // X first, then Y: +Y → +Z (about X) → +X (about Y).
+        assert_eq!(rotation(DVec3::new(90.0, 90.0, 0.0)) * DVec3::Y, DVec3::X);
+        let r = rotation(DVec3::new(0.0, 30.0, 0.0)) * DVec3::Z;
+        assert!((r - DVec3::new(0.5, 0.0, 3f64.sqrt() / 2.0)).length() < 1e-15);
+    }
+}
