@@ -234,6 +234,81 @@ fn every_width_traces_every_ray_as_the_scalar_kernel_does() {
     }
 }
 
+/// Random meshes (a triangle soup and two closed spheres, placed with rotations and uneven
+/// scales) among spheres and planes: rays from anywhere, and rays aimed exactly at vertices
+/// and at points of shared edges, traced by every width as by the scalar kernel.
+#[test]
+fn every_width_traces_rays_through_meshes_as_the_scalar_kernel_does() {
+    let wide: Vec<Kernel> = Kernel::ALL
+        .into_iter()
+        .filter(|k| *k != Kernel::Scalar && k.supported())
+        .collect();
+    if wide.is_empty() {
+        eprintln!("SKIPPED: this CPU has only the scalar kernel");
+        return;
+    }
+    let tmp = scratch("kernels-random-mesh");
+    let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+    let mut soup = String::new();
+    for _ in 0..60 {
+        soup += &format!(
+            "v {} {} {}\n",
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0)
+        );
+    }
+    for _ in 0..80 {
+        let i = |rng: &mut Rng| 1 + (rng.next() * 60.0) as usize % 60;
+        soup += &format!("f {} {} {}\n", i(&mut rng), i(&mut rng), i(&mut rng));
+    }
+    std::fs::write(tmp.join("soup.obj"), soup).unwrap();
+    std::fs::write(tmp.join("ball.obj"), common::uv_sphere(11, 6, true, false)).unwrap();
+    let mut text = scene(&mut rng, 5, 1, true);
+    let meshes = "objects:
+  - mesh: { file: soup.obj, scale: [1.5, 0.8, 1.1], rotate: [12, 40, -7], translate: [0.5, 0.2, 0], material: { diffuse: [0.6, 0.5, 0.4], specular: [1, 1, 1], reflection: 0.4 } }
+  - mesh: { file: ball.obj, shading: gouraud, translate: [-1.5, 0.5, 1], material: { diffuse: [0.3, 0.6, 0.4], specular: [1, 1, 1] } }
+  - mesh: { file: ball.obj, shading: constant, scale: 0.7, translate: [1.8, -0.5, 1.5], material: { diffuse: [0, 0, 0], transmission: 0.8, ior: 1.4 } }
+";
+    text = text.replacen("objects:\n", meshes, 1);
+    let file = tmp.join("random.yaml");
+    let seq = sequence::parse(&file, &text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    let world = World::new(seq.scene.clone());
+    let mut rays = Vec::new();
+    let corners: Vec<DVec3> = (0..40).map(|_| rng.vec(-2.0, 2.0)).collect();
+    while rays.len() < 1003 {
+        let origin = rng.vec(-6.0, 6.0);
+        let target = match rays.len() % 3 {
+            0 => rng.vec(-2.0, 2.0),
+            // Along the line between two random points, as shared edges of the soup lie.
+            1 => {
+                let (a, b) = (*rng.pick(&corners), *rng.pick(&corners));
+                a + (b - a) * rng.next()
+            }
+            _ => *rng.pick(&corners),
+        };
+        let d = (target - origin).normalize();
+        if d.is_finite() {
+            rays.push(Ray {
+                origin,
+                dir: d,
+                leaving: None,
+            });
+        }
+    }
+    for (depth, p) in [1, 4].into_iter().flat_map(|d| PRECISIONS.map(|p| (d, p))) {
+        let (want, cast) = Kernel::Scalar.trace(p, &world, &rays, depth);
+        for &k in &wide {
+            let (got, got_cast) = k.trace(p, &world, &rays, depth);
+            let name = format!("depth {depth} {} {}", k.name(), p.name());
+            for (i, (a, b)) in want.iter().zip(&got).enumerate() {
+                assert!(same(*a, *b), "{name}: ray {i} {:?}: {a} vs {b}", rays[i]);
+            }
+            assert_eq!(cast, got_cast, "{name}");
+        }
+    }
+}
+
 const PRECISIONS: [Precision; 2] = [Precision::F64, Precision::F32];
 
 /// Renders `args` with every kernel this CPU has, in f64 and in f32; every output must equal
@@ -340,6 +415,36 @@ fn frames_from_every_kernel_equal_the_scalar_kernels() {
 }
 
 /// Motion blur and depth of field give each lane its own camera, instant and lens point.
+/// Meshes in every shading model, with a mirror and glass, traced by every kernel.
+#[test]
+fn mesh_frames_from_every_kernel_equal_the_scalar_kernels() {
+    let tmp = scratch("kernels-mesh");
+    std::fs::write(tmp.join("ball.obj"), common::uv_sphere(14, 7, true, false)).unwrap();
+    std::fs::write(tmp.join("bare.obj"), common::uv_sphere(9, 5, false, true)).unwrap();
+    let clay = "{ ambient: [0.1, 0.05, 0.05], diffuse: [0.7, 0.4, 0.3], specular: [1, 1, 1], shininess: 40, reflection: 0.2 }";
+    let seq = format!(
+        "objects:
+  - mesh: {{ file: ball.obj, shading: phong, translate: [-1.1, 0, 0], material: {clay} }}
+  - mesh: {{ file: ball.obj, shading: flat, translate: [1.1, 0, 0], rotate: [10, 20, 30], material: {clay} }}
+  - mesh: {{ file: bare.obj, shading: gouraud, translate: [0, 0, -1.6], scale: [1, 0.7, 1], material: {clay} }}
+  - mesh: {{ file: ball.obj, shading: constant, translate: [0, -0.3, 1.2], scale: 0.5, material: {clay} }}
+  - mesh: {{ file: bare.obj, translate: [0.4, 0.9, 0.9], scale: 0.4, material: {{ diffuse: [0, 0, 0], transmission: 0.9, ior: 1.5 }} }}
+  - sphere: {{ center: [-0.6, 0.9, -0.4], radius: 0.3, material: {clay} }}
+  - plane: {{ point: [0, -1, 0], normal: [0, 1, 0], material: {{ diffuse: [0.6, 0.6, 0.6], reflection: 0.3 }} }}
+lights:
+  - point: {{ position: [4, 5, 6], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }}
+  - directional: {{ direction: [-1, -2, -0.5], diffuse: [0.3, 0.3, 0.3], specular: [0.2, 0.2, 0.2] }}
+camera: {{ position: [0.3, 1.2, 4], look_at: [0, 0, -0.3], fov: 60 }}
+"
+    );
+    std::fs::write(tmp.join("seq.yaml"), seq).unwrap();
+    every_kernel_equals_scalar(
+        &tmp,
+        "mesh",
+        &["--size", "97x55", "--samples", "2", "--depth"],
+    );
+}
+
 #[test]
 fn blurred_and_defocused_frames_from_every_kernel_equal_the_scalar_kernels() {
     let tmp = scratch("kernels-film");

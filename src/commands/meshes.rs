@@ -28,8 +28,16 @@ pub(super) fn summary(scene: &Scene) -> String {
             m.file.display(),
             m.triangles.len(),
             m.positions.len(),
-            if m.file_normals { "normals from the file" } else { "normals averaged from the faces" },
-            if m.uvs.is_some() { ", texture coordinates" } else { "" },
+            if m.file_normals {
+                "normals from the file"
+            } else {
+                "normals averaged from the faces"
+            },
+            if m.uvs.is_some() {
+                ", texture coordinates"
+            } else {
+                ""
+            },
             bytes(m.bytes as usize),
             seconds(m.load_seconds),
             bytes(data),
@@ -49,7 +57,12 @@ pub(super) fn summary(scene: &Scene) -> String {
             let _ = writeln!(out, "              note: {note}");
         }
         for k in placements {
-            if let Shape::Mesh { mesh, place, shading } = scene.objects[k].shape {
+            if let Shape::Mesh {
+                mesh,
+                place,
+                shading,
+            } = scene.objects[k].shape
+            {
                 let (lo, hi) = scene.mesh_bounds(mesh, &place);
                 let _ = writeln!(
                     out,

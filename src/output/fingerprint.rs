@@ -231,7 +231,11 @@ impl Canon for Object {
                 let r = place.rotation;
                 let rotation = [r.x_axis, r.y_axis, r.z_axis];
                 let shading = *shading as u32;
-                tagged(h, 2, &[mesh, &place.scale, &rotation, &place.translate, &shading])
+                tagged(
+                    h,
+                    2,
+                    &[mesh, &place.scale, &rotation, &place.translate, &shading],
+                )
             }
         }
         material.canon(h);

@@ -118,7 +118,10 @@ fn placement(path: &str, m: &raw::Mesh) -> Check<Placement> {
     Ok(Placement {
         scale,
         rotation: rotation(rotate),
-        translate: vector(&format!("{path}.translate"), m.translate.unwrap_or_default())?,
+        translate: vector(
+            &format!("{path}.translate"),
+            m.translate.unwrap_or_default(),
+        )?,
     })
 }
 

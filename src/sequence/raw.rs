@@ -208,12 +208,14 @@ pub struct Scale(pub V3);
 
 impl<'de> Deserialize<'de> for Scale {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        Filter::deserialize(d).map(|Filter(v)| Scale(v)).map_err(|e| {
-            de::Error::custom(
-                e.to_string()
-                    .replace("a number in [0, 1] or a colour triple [r, g, b]", "a number or a triple [x, y, z]"),
-            )
-        })
+        Filter::deserialize(d)
+            .map(|Filter(v)| Scale(v))
+            .map_err(|e| {
+                de::Error::custom(e.to_string().replace(
+                    "a number in [0, 1] or a colour triple [r, g, b]",
+                    "a number or a triple [x, y, z]",
+                ))
+            })
     }
 }
 

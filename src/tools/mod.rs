@@ -4,4 +4,5 @@
 
 pub mod bench;
 pub mod measure;
+pub mod meshgen;
 pub mod preview;

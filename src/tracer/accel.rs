@@ -9,8 +9,8 @@
 //! depends on the packet, and this rule makes the answer independent of that order, so every
 //! lane width gives the same hit.
 
-use super::intersect::{Hit, Ray, plane_hit, sphere_hit};
 use super::bvh::Bvh;
+use super::intersect::{Hit, Ray, plane_hit, sphere_hit};
 use super::lanes::{F64x1, Lanes, MAX_LANES, Mask};
 use super::mesh::{Best, Instance, NO_TRIANGLE};
 use super::vec3::V3;
@@ -309,7 +309,9 @@ impl Geometry {
             self.walk(rays, &mut search);
         }
         if !self.meshes.is_empty() && search.open.any() {
-            search.open = search.open.andnot(self.mesh_blocked(rays, max_t, search.open));
+            search.open = search
+                .open
+                .andnot(self.mesh_blocked(rays, max_t, search.open));
         }
         active.andnot(search.open)
     }

@@ -73,12 +73,16 @@ impl Bvh {
 
     /// Bytes the hierarchy holds (for `check`).
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node>() + self.tris.len() * std::mem::size_of::<Tri>()
+        self.nodes.len() * std::mem::size_of::<Node>()
+            + self.tris.len() * std::mem::size_of::<Tri>()
     }
 }
 
 fn tri_box(t: &Tri) -> (DVec3, DVec3) {
-    (t.v[0].min(t.v[1]).min(t.v[2]), t.v[0].max(t.v[1]).max(t.v[2]))
+    (
+        t.v[0].min(t.v[1]).min(t.v[2]),
+        t.v[0].max(t.v[1]).max(t.v[2]),
+    )
 }
 
 fn centre(t: &Tri) -> DVec3 {
@@ -292,12 +296,18 @@ mod tests {
     #[test]
     fn the_tree_is_the_same_on_any_pool() {
         let mesh = grid(200);
-        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
         let a = one.install(|| Bvh::build(&mesh));
         let b = Bvh::build(&mesh);
         assert_eq!(a.nodes.len(), b.nodes.len());
         for (x, y) in a.nodes.iter().zip(&b.nodes) {
-            assert_eq!((x.min, x.max, x.first, x.count), (y.min, y.max, y.first, y.count));
+            assert_eq!(
+                (x.min, x.max, x.first, x.count),
+                (y.min, y.max, y.first, y.count)
+            );
         }
         assert!(a.tris.iter().zip(&b.tris).all(|(x, y)| x.id == y.id));
     }

@@ -9,8 +9,8 @@
 
 use super::World;
 use super::accel::Rays;
-use super::intersect::{plane_hit, sphere_hit};
 use super::bvh::Bvh;
+use super::intersect::{plane_hit, sphere_hit};
 use super::lanes::{F64x1, Lanes, MAX_LANES, Mask};
 use super::mesh::Instance;
 use super::shade::{Eye, NEGLIGIBLE_WEIGHT, Shaded, powi, shade_hit};

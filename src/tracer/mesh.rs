@@ -208,8 +208,13 @@ impl<V: Lanes> Visit<V> for NearestVisit<'_, V> {
     fn leaf(&mut self, tris: &[Tri], enter: V::M) {
         let best = &mut *self.best;
         for tri in tris {
-            let v = [V3::splat(tri.v[0]), V3::splat(tri.v[1]), V3::splat(tri.v[2])];
-            let (hit, t, w) = triangle_hit(v, V3::splat(tri.n), self.rays.origin, self.rays.dir, enter);
+            let v = [
+                V3::splat(tri.v[0]),
+                V3::splat(tri.v[1]),
+                V3::splat(tri.v[2]),
+            ];
+            let (hit, t, w) =
+                triangle_hit(v, V3::splat(tri.n), self.rays.origin, self.rays.dir, enter);
             if !hit.any() {
                 continue;
             }
@@ -255,8 +260,13 @@ impl<V: Lanes> Visit<V> for AnyVisit<'_, V> {
     fn leaf(&mut self, tris: &[Tri], enter: V::M) {
         let mut enter = enter;
         for tri in tris {
-            let v = [V3::splat(tri.v[0]), V3::splat(tri.v[1]), V3::splat(tri.v[2])];
-            let (hit, t, _) = triangle_hit(v, V3::splat(tri.n), self.rays.origin, self.rays.dir, enter);
+            let v = [
+                V3::splat(tri.v[0]),
+                V3::splat(tri.v[1]),
+                V3::splat(tri.v[2]),
+            ];
+            let (hit, t, _) =
+                triangle_hit(v, V3::splat(tri.n), self.rays.origin, self.rays.dir, enter);
             let b = hit.and(t.lt(self.max_t));
             self.blocked = self.blocked.or(b);
             enter = enter.andnot(b);

@@ -108,7 +108,12 @@ impl<V: Lanes> MeshLanes<V> {
     /// the lanes entering the mesh (hitting a front face, against the geometric normal), and
     /// the lift for rays leaving the hits.
     #[inline(always)]
-    pub(super) fn facing(&self, dir: V3<V>, normal: V3<V>, entering: V::M) -> (V3<V>, V::M, Lift<V>) {
+    pub(super) fn facing(
+        &self,
+        dir: V3<V>,
+        normal: V3<V>,
+        entering: V::M,
+    ) -> (V3<V>, V::M, Lift<V>) {
         let back = self.geom.dot(dir).gt(V::splat(0.0));
         let shade = V3::select(back, -self.shade, self.shade);
         let front = V::M::first(V::N).andnot(back);
@@ -141,7 +146,11 @@ impl<V: Lanes> MeshLanes<V> {
             let c0 = V3::from_fn(|k| self.corners[0][k]);
             let c1 = V3::from_fn(|k| self.corners[1][k]);
             let c2 = V3::from_fn(|k| self.corners[2][k]);
-            (self.constant, (c0 + c1 + c2) * V::splat(1.0 / 3.0), lift.normal)
+            (
+                self.constant,
+                (c0 + c1 + c2) * V::splat(1.0 / 3.0),
+                lift.normal,
+            )
         };
         let at = Lift {
             normal: lift.normal,
@@ -211,7 +220,11 @@ impl Lane {
         let wound = place.normal((q[1] - q[0]).cross(q[2] - q[0]));
         let smooth = place.normal(n[0] * b[0] + n[1] * b[1] + n[2] * b[2]);
         // The vertex normals say which side is out (a file may wind its faces either way).
-        let geom = if wound.dot(smooth) < 0.0 { -wound } else { wound };
+        let geom = if wound.dot(smooth) < 0.0 {
+            -wound
+        } else {
+            wound
+        };
         let lane = Lane {
             geom,
             shade: match shading {

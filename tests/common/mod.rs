@@ -214,3 +214,67 @@ pub fn measure(mut child: Child, started: Instant, feed: impl FnOnce(&mut Child)
         peak_kb: usage.ru_maxrss as u64,
     }
 }
+
+/// A UV sphere of radius 1 around the origin as OBJ text: `rings` × `segments` quads (the
+/// poles fanned), outward vertex normals when `normals`, wound clockwise seen from outside
+/// when `inward` (the vertex normals still point out).
+pub fn uv_sphere(segments: usize, rings: usize, normals: bool, inward: bool) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    // Vertex 1 is the north pole, then `rings - 1` rings of `segments`, then the south pole.
+    let index = |i: usize, j: usize| match i {
+        0 => 1,
+        i if i == rings => 2 + (rings - 1) * segments,
+        i => 2 + (i - 1) * segments + j % segments,
+    };
+    let mut put = |th: f64, ph: f64| {
+        let p = [th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()];
+        writeln!(s, "v {} {} {}", p[0], p[1], p[2]).unwrap();
+        if normals {
+            writeln!(s, "vn {} {} {}", p[0], p[1], p[2]).unwrap();
+        }
+    };
+    let pi = std::f64::consts::PI;
+    put(0.0, 0.0);
+    for i in 1..rings {
+        for j in 0..segments {
+            put(
+                pi * i as f64 / rings as f64,
+                2.0 * pi * j as f64 / segments as f64,
+            );
+        }
+    }
+    put(pi, 0.0);
+    for i in 0..rings {
+        for j in 0..segments {
+            let quad = [
+                index(i, j + 1),
+                index(i + 1, j + 1),
+                index(i + 1, j),
+                index(i, j),
+            ];
+            let mut corners: Vec<usize> = Vec::new();
+            for c in quad {
+                if !corners.contains(&c) {
+                    corners.push(c);
+                }
+            }
+            // As listed, the corners wind counter-clockwise seen from outside.
+            if inward {
+                corners.reverse();
+            }
+            let f: Vec<String> = corners
+                .iter()
+                .map(|c| {
+                    if normals {
+                        format!("{c}//{c}")
+                    } else {
+                        c.to_string()
+                    }
+                })
+                .collect();
+            writeln!(s, "f {}", f.join(" ")).unwrap();
+        }
+    }
+    s
+}

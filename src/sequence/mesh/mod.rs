@@ -81,7 +81,9 @@ fn read(file: &Path) -> Result<Vec<u8>, MeshError> {
         .custom_flags(libc::O_NONBLOCK)
         .open(file)
         .map_err(|e| fail(format!("cannot read: {e}")))?;
-    let meta = f.metadata().map_err(|e| fail(format!("cannot read: {e}")))?;
+    let meta = f
+        .metadata()
+        .map_err(|e| fail(format!("cannot read: {e}")))?;
     if !meta.is_file() {
         return Err(fail(
             "is not a regular file (a FIFO, device or directory cannot be a mesh)".into(),
@@ -130,11 +132,14 @@ fn finish(
     if kept.is_empty() {
         return Err(match total {
             0 => "the file has no faces".into(),
-            n => format!("all {n} triangles are degenerate (zero area, a repeated index or a non-finite vertex)"),
+            n => format!(
+                "all {n} triangles are degenerate (zero area, a repeated index or a non-finite vertex)"
+            ),
         });
     }
     let face = area_weighted(&positions, &kept);
-    let file_normals = normals.is_some() && has_normal.as_ref().is_none_or(|h| h.iter().all(|&b| b));
+    let file_normals =
+        normals.is_some() && has_normal.as_ref().is_none_or(|h| h.iter().all(|&b| b));
     let normals = match normals {
         Some(n) => n
             .iter()
@@ -164,6 +169,21 @@ fn finish(
         bytes: bytes.len() as u64,
         load_seconds: started.elapsed().as_secs_f64(),
     })
+}
+
+/// A mesh made in memory (benchmarks, tests): the same dropping of degenerate triangles and
+/// the same vertex normals as a file without normals gets.
+pub fn from_triangles(name: &str, positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Mesh {
+    let soup = Soup {
+        positions,
+        triangles,
+        ..Soup::default()
+    };
+    let digest = fnv1a(name.as_bytes());
+    let mut m = finish(Path::new(name), soup, &[], std::time::Instant::now())
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    m.digest = digest;
+    m
 }
 
 /// Zero area (the edge cross product is exactly zero), a repeated index, or a vertex that is

@@ -14,7 +14,10 @@ const NONE: u32 = u32::MAX;
 
 pub(super) fn read(bytes: &[u8]) -> Result<Soup, Fail> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
+        let line = 1 + bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
         (line, "is not UTF-8 text".to_string())
     })?;
     let (mut v, mut vt, mut vn) = (Vec::new(), Vec::new(), Vec::new());
@@ -62,7 +65,10 @@ pub(super) fn read(bytes: &[u8]) -> Result<Soup, Fail> {
         }
     }
     if triangles.is_empty() {
-        return Err((text.lines().count().max(1), "the file has no faces (`f`)".into()));
+        return Err((
+            text.lines().count().max(1),
+            "the file has no faces (`f`)".into(),
+        ));
     }
     let mut soup = Soup {
         positions: order.iter().map(|c| v[c.0 as usize]).collect(),
@@ -102,7 +108,10 @@ fn coords<'a, const N: usize>(
         match words.next() {
             Some(w) => {
                 *o = w.parse::<f64>().map_err(|_| {
-                    (line, format!("`{what}` coordinate {} is not a number (got `{w}`)", i + 1))
+                    (
+                        line,
+                        format!("`{what}` coordinate {} is not a number (got `{w}`)", i + 1),
+                    )
                 })?;
             }
             None if i < need => {
@@ -128,7 +137,9 @@ fn corner(w: &str, line: usize, nv: usize, nvt: usize, nvn: usize) -> Result<Cor
         if i == 0 || at < 0 || at >= count as i64 {
             return Err((
                 line,
-                format!("face corner `{w}`: {what} index {i} is out of range ({count} defined so far)"),
+                format!(
+                    "face corner `{w}`: {what} index {i} is out of range ({count} defined so far)"
+                ),
             ));
         }
         Ok(at as u32)

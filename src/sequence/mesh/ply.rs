@@ -224,7 +224,11 @@ fn truncated(what: &str, i: u64) -> Fail {
 }
 
 fn vertices(e: &Element, body: &mut Body, soup: &mut Soup) -> Result<(), Fail> {
-    let at = |names: &[&str]| e.props.iter().position(|p| names.contains(&p.name.as_str()));
+    let at = |names: &[&str]| {
+        e.props
+            .iter()
+            .position(|p| names.contains(&p.name.as_str()))
+    };
     let (Some(x), Some(y), Some(z)) = (at(&["x"]), at(&["y"]), at(&["z"])) else {
         return Err((Some("header".into()), "`vertex` needs x, y and z".into()));
     };
@@ -341,11 +345,19 @@ mod tests {
     fn binary(big: bool) -> Vec<u8> {
         let head = format!(
             "ply\nformat {} 1.0\ncomment made by hand\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float s\nproperty float t\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n",
-            if big { "binary_big_endian" } else { "binary_little_endian" }
+            if big {
+                "binary_big_endian"
+            } else {
+                "binary_little_endian"
+            }
         );
         let mut b = head.into_bytes();
         let f = |b: &mut Vec<u8>, x: f32| {
-            b.extend(if big { x.to_be_bytes() } else { x.to_le_bytes() })
+            b.extend(if big {
+                x.to_be_bytes()
+            } else {
+                x.to_le_bytes()
+            })
         };
         for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
             for v in [x, y, 0.0, x, y] {
@@ -354,7 +366,11 @@ mod tests {
         }
         b.push(4);
         for i in 0..4i32 {
-            b.extend(if big { i.to_be_bytes() } else { i.to_le_bytes() });
+            b.extend(if big {
+                i.to_be_bytes()
+            } else {
+                i.to_le_bytes()
+            });
         }
         b
     }
@@ -379,7 +395,10 @@ mod tests {
         let e = read(bad.as_bytes()).err().unwrap();
         assert_eq!(e.0.as_deref(), Some("face 0"));
         let short = format!("{head}0 0 0 0 0 1\n1 0 0\n");
-        assert_eq!(read(short.as_bytes()).err().unwrap().0.as_deref(), Some("vertex 1"));
+        assert_eq!(
+            read(short.as_bytes()).err().unwrap().0.as_deref(),
+            Some("vertex 1")
+        );
         let mut b = binary(false);
         b.truncate(b.len() - 3);
         assert_eq!(read(&b).err().unwrap().0.as_deref(), Some("face 0"));

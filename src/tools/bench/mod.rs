@@ -17,6 +17,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 mod kernels;
+mod mesh;
 
 const TALK: &str = include_str!("../../../sequences/talk.yaml");
 const TALK_ORBIT: &str = include_str!("../../../sequences/bench/talk_orbit.yaml");
@@ -211,6 +212,9 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
     };
     if want("kernels") {
         kernels::kernels(o, out, &cmd("kernels"))?;
+    }
+    if want("mesh") {
+        mesh::meshes(o, out, &cmd("mesh"))?;
     }
     if want("render") || want("threads") {
         let (t2, frame) = render_only(&world, &talk, cores, o.runs)?;
