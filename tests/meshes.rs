@@ -312,7 +312,7 @@ fn bad_meshes_are_refused_with_file_line_and_field() {
         ("empty.obj", "no faces"),
         ("flat.obj", "all 1 triangles are degenerate"),
         ("nofaces.ply", "no `face` element"),
-        ("trunc.ply", "trunc.ply: vertex 1: the file ends early"),
+        ("trunc.ply", "trunc.ply: vertex 0: the file ends early"),
         ("bad.ply", "bad.ply: face 0: vertex index 9 is out of range"),
         ("model.stl", "must end in .obj or .ply"),
         ("missing.obj", "missing.obj: cannot read"),

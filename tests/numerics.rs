@@ -288,6 +288,19 @@ fn transform(seq: &mut Sequence, s: f64, offset: DVec3) {
                 point: map(point),
                 normal,
             },
+            Shape::Mesh {
+                mesh,
+                place,
+                shading,
+            } => Shape::Mesh {
+                mesh,
+                place: rayreel::scene::Placement {
+                    scale: s * place.scale,
+                    translate: map(place.translate),
+                    ..place
+                },
+                shading,
+            },
         };
     }
     for l in &mut seq.scene.lights {

@@ -396,6 +396,7 @@ mod tests {
         };
         let scene = Scene {
             objects: Vec::new(),
+            meshes: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
             background: DVec3::ZERO,

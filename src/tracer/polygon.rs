@@ -8,7 +8,7 @@
 //! same for every packet width.
 
 use super::World;
-use super::accel::Nearest;
+use super::accel::{Nearest, Rays};
 use super::lanes::{Lanes, MAX_LANES, Mask};
 use super::mesh::NO_TRIANGLE;
 use super::shade::Lift;
@@ -41,6 +41,7 @@ pub(super) fn lift_distance(p: DVec3, t: f64, roundoff: f64) -> f64 {
 }
 
 /// The unit roundoff of the lanes' float type.
+#[inline(always)]
 pub(super) fn roundoff<V: Lanes>() -> f64 {
     if V::BOX_SLACK == 0.0 {
         f64::EPSILON / 2.0
@@ -51,6 +52,7 @@ pub(super) fn roundoff<V: Lanes>() -> f64 {
 
 impl<V: Lanes> MeshLanes<V> {
     /// The mesh lanes of `hit` (None when no lane hit a triangle).
+    #[inline(always)]
     pub(super) fn of(world: &World, hit: &Nearest<V>, point: V3<V>) -> Option<MeshLanes<V>> {
         let mut bits = 0u32;
         for k in 0..V::N {
@@ -99,6 +101,7 @@ impl<V: Lanes> MeshLanes<V> {
     }
 
     /// The lanes that are lit somewhere else than at the hit.
+    #[inline(always)]
     pub(super) fn elsewhere(&self) -> V::M {
         self.gouraud.or(self.constant)
     }
@@ -129,16 +132,17 @@ impl<V: Lanes> MeshLanes<V> {
 
     /// Where `gouraud` lanes are lit (stations 0–2: the vertices, with their normals turned
     /// like the face) and `constant` lanes (station 3: the centroid ((p0 + p1) + p2)·(1/3),
-    /// with the face normal turned to the ray): the lanes, point, normal and lift.
+    /// with the face normal turned to the ray): the lanes, point, normal, the direction light
+    /// leaves towards the viewer reversed (normalize(p − o), o the hit ray's origin) and lift.
     #[inline(always)]
     pub(super) fn station(
         &self,
         station: usize,
-        dir: V3<V>,
+        ray: &Rays<V>,
         lift: &Lift<V>,
-    ) -> (V::M, V3<V>, V3<V>, Option<Lift<V>>) {
+    ) -> (V::M, V3<V>, V3<V>, V3<V>, Lift<V>) {
         let (lanes, p, n) = if station < 3 {
-            let back = self.geom.dot(dir).gt(V::splat(0.0));
+            let back = self.geom.dot(ray.dir).gt(V::splat(0.0));
             let p = V3::from_fn(|k| self.corners[station][k]);
             let n = V3::from_fn(|k| self.corner_normals[station][k]);
             (self.gouraud, p, V3::select(back, -n, n))
@@ -156,7 +160,7 @@ impl<V: Lanes> MeshLanes<V> {
             normal: lift.normal,
             delta: self.lift_at(p),
         };
-        (lanes, p, n, Some(at))
+        (lanes, p, n, (p - ray.origin).normalize(), at)
     }
 
     /// The colour of each lane from the stations' light: `lit[0]` at the hit, on `gouraud`

@@ -154,15 +154,18 @@ pub(super) fn shade_hit<'a, V: Lanes>(
     };
     let mut lit = [V3::zero(); 5];
     for (station, out) in lit.iter_mut().enumerate().take(stations) {
-        let (lanes, p, n, l) = match (station, &mesh, &lift) {
-            (1.., Some(m), Some(l)) => m.station(station - 1, ray.dir, l),
-            _ => (here, point, normal, None),
+        let (lanes, p, n, view, at) = match (station, &mesh, &lift) {
+            (1.., Some(m), Some(l)) => {
+                let (lanes, p, n, view, at) = m.station(station - 1, ray, l);
+                (lanes, p, n, view, Some(at))
+            }
+            _ => (here, point, normal, ray.dir, None),
         };
         if !lanes.any() {
             continue;
         }
-        let l = l.as_ref().or(lift.as_ref());
-        *out = local(world, &surface, p, n, ray.dir, hit.object, lanes, l, rays);
+        let l = at.as_ref().or(lift.as_ref());
+        *out = local(world, &surface, p, n, view, hit.object, lanes, l, rays);
     }
     let local = match &mesh {
         Some(m) if stations > 1 => m.mixed(&lit),
