@@ -180,7 +180,9 @@ impl<V: Lanes> MeshLanes<V> {
     #[inline(always)]
     fn lift_at(&self, p: V3<V>) -> V {
         let u = roundoff::<V>();
-        let delta = V::from_fn(|k| lift_distance(p.lane(k), 0.0, u));
+        // Lane values leave the lanes before the closure, which sees plain f64 only.
+        let (x, y, z) = (p.x.array(), p.y.array(), p.z.array());
+        let delta = V::from_fn(|k| lift_distance(DVec3::new(x[k], y[k], z[k]), 0.0, u));
         V::select(self.is_mesh, delta, V::splat(0.0))
     }
 }
