@@ -1,15 +1,24 @@
 # An independent float64 implementation of mesh pixels, written from docs/spec/tracer.md,
-# docs/spec/mesh.md, docs/spec/output.md and docs/meshes.md alone (not from rayreel's code).
-# It covers what the test scenes use: one sample a pixel (the centre), encoding linear, f64,
-# point / directional / ambient lights, spheres, planes, OBJ meshes (phong, flat, gouraud,
-# constant), reflection paths (no glass, no spot lights, no adaptive sampling).
+# docs/spec/mesh.md (as of d569cf4: gouraud and constant see the viewer from each station),
+# docs/spec/output.md and docs/meshes.md alone (not from rayreel's code). It covers what the
+# test scenes use: one sample a pixel (the centre), encoding linear, f64, point / directional /
+# spot / ambient lights, spheres, planes, OBJ and PLY meshes (phong, flat, gouraud, constant),
+# reflection paths and glass trees (no adaptive sampling, no alpha, no f32 frames).
 #
-# Usage: python3 mesh_reference.py [SCENE ...]    (needs numpy and Pillow)
-#   writes mesh/SCENE.yaml and mesh/ref_SCENE.png; with RAYREEL=path/to/rayreel it also
-#   renders the YAML with rayreel and compares byte by byte, listing differing pixels.
+# Usage: python3 mesh_reference.py [SCENE ...]    (needs numpy and Pillow; OpenEXR and mpmath optional)
+#   writes mesh/SCENE.yaml and mesh/ref_SCENE.png; with RAYREEL=path/to/rayreel it also renders
+#   the YAML with rayreel, compares the 8-bit PNG bytes and (with the OpenEXR module, through a
+#   32-bit EXR) every f32 channel bit for bit, listing differing pixels.
+#   SIZE=3 renders every scene 3x wider and higher.
+#   PLY_ASCII_AS_F64=1 parses ASCII PLY `float` values straight to f64. The default follows the
+#   literal "values of any PLY scalar type are widened exactly to f64" (round to f32, then widen);
+#   rayreel (888916b) does the former: scene `files` differs in 189 of 9216 f32 channels by default.
+#   UNLIFTED_O=1 takes the unlifted hit point as "o the hit ray's origin" of gouraud/constant
+#   view directions (rayreel uses the lifted origin: scene far_inside at SIZE=3 differs otherwise).
 #
 # Every operation follows the operation order the docs give; Python floats are IEEE f64
-# without fused multiply-add, numpy elementwise ops likewise.
+# without fused multiply-add, numpy elementwise ops likewise. math.sin/cos/tan/exp/pow (the C
+# library) stand in for Rust's libm; check_libm() compares them with correctly rounded values.
 import math, os, subprocess, sys
 import numpy as np
 from PIL import Image
@@ -18,6 +27,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 MESHDIR = os.path.join(HERE, 'mesh')
 INF = math.inf
 U64 = 2.0 ** -53
+# "o the hit ray's origin" for gouraud and constant: the ray's actual (lifted) origin, or, with
+# UNLIFTED_O=1, the unlifted hit point it was lifted from (an alternative reading, for the report)
+UNLIFTED_O = os.environ.get('UNLIFTED_O') == '1'
 
 
 # ---------------------------------------------------------------- vectors (tracer.md)
@@ -520,6 +532,7 @@ class Scene:
     # ---- a path (tracer.md "Path")
     def trace(self, o, d):
         colour = (0.0, 0.0, 0.0); w = 1.0; leaving = None
+        self.view_o = o
         for depth in range(self.max_depth):
             h = self.nearest(o, d, leaving)
             if h is None:
@@ -536,7 +549,7 @@ class Scene:
                 next_origin = lambda r: P
                 next_leaving = ob
             else:
-                local, N, G, delta = self.mesh_surface(ob, extra, P, t, d)
+                local, N, G, delta = self.mesh_surface(ob, extra, P, t, d, o)
                 next_origin = self.lifted(P, G, delta)
                 next_leaving = None
             colour = add(colour, smul(w, local))
@@ -545,6 +558,7 @@ class Scene:
                 break
             r = normalize(sub(d, smul(2.0 * dot(d, N), N)))
             o = next_origin(r); d = r; leaving = next_leaving
+            self.view_o = P if UNLIFTED_O else o
         return colour
 
     def surface(self, o, d, h):
@@ -557,16 +571,17 @@ class Scene:
             N = neg(N0) if dot(N0, d) > 0 else N0
             local = self.light_sum(P, N, d, ob['m'], lambda r: P, ob)
             return local, N, entering, (lambda r: P), ob
-        local, N, G, delta, back = self.mesh_surface(ob, extra, P, t, d, want_back=True)
+        local, N, G, delta, back = self.mesh_surface(ob, extra, P, t, d, o, want_back=True)
         return local, N, not back, self.lifted(P, G, delta), None
 
     def trace_tree(self, o, d):
         B = max(1024, self.max_depth)
         colour = (0.0, 0.0, 0.0); spent = 0
-        level = [(o, d, None, (1.0, 1.0, 1.0))]
+        level = [(o, d, None, (1.0, 1.0, 1.0), o)]
         for lv in range(self.max_depth):
             nxt = []
-            for (o, d, leaving, w) in level:
+            for (o, d, leaving, w, unlifted) in level:
+                self.view_o = unlifted if UNLIFTED_O else o
                 if spent >= B:
                     continue
                 spent += 1
@@ -575,6 +590,7 @@ class Scene:
                     colour = add(colour, had(self.bg, w)); continue
                 mat = h[2]['m']
                 local, N, entering, origin, lv_obj = self.surface(o, d, h)
+                P_hit = add(o, smul(h[0], d))
                 colour = add(colour, had(local, w))
                 if lv == self.max_depth - 1:
                     continue
@@ -602,16 +618,16 @@ class Scene:
                 wr = had(w, R)
                 if max(max(wr[0], wr[1]), wr[2]) >= 1e-30:
                     r = normalize(sub(d, smul(2.0 * dot(d, N), N)))
-                    nxt.append((origin(r), r, lv_obj, wr))
+                    nxt.append((origin(r), r, lv_obj, wr, P_hit))
                 wt = had(w, Tw)
                 if max(max(wt[0], wt[1]), wt[2]) >= 1e-30:
-                    nxt.append((origin(T), T, lv_obj, wt))
+                    nxt.append((origin(T), T, lv_obj, wt, P_hit))
             level = nxt
             if not level:
                 break
         return colour
 
-    def mesh_surface(self, ob, extra, P, t, d, want_back=False):
+    def mesh_surface(self, ob, extra, P, t, d, o, want_back=False):
         pl = ob['pl']; mf = pl.mf; mat = ob['m']
         k, w0, w1, w2 = extra
         i0, i1, i2 = mf.tris[k]
@@ -638,13 +654,14 @@ class Scene:
                 if back:
                     Ni = neg(Ni)
                 dq = 64 * U64 * (max(abs(Q[0]), abs(Q[1]), abs(Q[2])) + 0.0)
-                cs.append(self.light_sum(Q, Ni, d, mat, self.lifted(Q, G, dq), None))
+                # mesh.md (d569cf4): d_i = normalize(Q_i − o), o the hit ray's origin, in the place of d
+                cs.append(self.light_sum(Q, Ni, normalize(sub(Q, self.view_o)), mat, self.lifted(Q, G, dq), None))
             local = add(add(smul(b0, cs[0]), smul(u, cs[1])), smul(v, cs[2]))
         else:  # constant
             Q = [pl.point(mf.P[idx]) for idx in (i0, i1, i2)]
             C = vmul(add(add(Q[0], Q[1]), Q[2]), 1.0 / 3.0)
             dc = 64 * U64 * (max(abs(C[0]), abs(C[1]), abs(C[2])) + 0.0)
-            local = self.light_sum(C, G, d, mat, self.lifted(C, G, dc), None)
+            local = self.light_sum(C, G, normalize(sub(C, self.view_o)), mat, self.lifted(C, G, dc), None)
         if want_back:
             return local, N, G, delta, back
         return local, N, G, delta
@@ -770,6 +787,7 @@ MATERIALS.update({
 })
 SCENES['far'] = shifted(SCENES['shading4'], [3e6, -1e5, 2.5e6])
 SCENES['far_placements'] = shifted(SCENES['placements'], [-7e4, 1e3, 5e5])
+SCENES['far_inside'] = shifted(SCENES['inside'], [2e7, -3e6, 1e7])
 
 def to_yaml(d):
     import json
