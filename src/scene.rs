@@ -148,13 +148,16 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// The smallest and largest local coordinates of its vertices.
+    /// The smallest and largest local coordinates of the vertices its triangles use (a
+    /// vertex only a dropped triangle used, finite or not, does not count).
     pub fn bounds(&self) -> (DVec3, DVec3) {
-        self.positions
-            .iter()
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+        self.triangles.iter().flatten().fold(
+            (DVec3::INFINITY, DVec3::NEG_INFINITY),
+            |(lo, hi), &i| {
+                let p = self.positions[i as usize];
                 (lo.min(p), hi.max(p))
-            })
+            },
+        )
     }
 }
 

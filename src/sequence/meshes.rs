@@ -171,9 +171,9 @@ fn check_reach(path: &str, place: &Placement, mesh: &Mesh) -> Check<()> {
         + (place.scale.abs().max_element() * lo.abs().max(hi.abs()).max_element()) * 3f64.sqrt();
     if !(far <= MAX_MAGNITUDE) {
         return invalid(
-            format!("{path}.scale"),
+            path,
             format!(
-                "the placed model reaches {} from the origin; coordinates are limited to ±{MAX_MAGNITUDE:e}",
+                "the model placed by its scale and translate reaches {} from the origin; coordinates are limited to ±{MAX_MAGNITUDE:e}",
                 num(far)
             ),
         );
