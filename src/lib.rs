@@ -7,6 +7,7 @@ pub mod cli;
 pub mod console;
 pub mod frame;
 pub mod frameset;
+mod lanes;
 pub mod output;
 pub mod plan;
 pub mod progress;

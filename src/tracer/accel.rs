@@ -10,8 +10,7 @@
 //! lane width gives the same hit.
 
 use super::intersect::{Hit, Ray, plane_hit, sphere_hit};
-use super::lanes::{F64x1, Lanes, Mask};
-use super::vec3::V3;
+use crate::lanes::{F64x1, Lanes, Mask, V3};
 use crate::scene::{Object, Shape, closest_to_origin};
 use glam::DVec3;
 use std::ops::Range;

@@ -10,9 +10,8 @@
 use super::World;
 use super::accel::Rays;
 use super::intersect::{plane_hit, sphere_hit};
-use super::lanes::{F64x1, Lanes, MAX_LANES, Mask};
 use super::shade::{Eye, NEGLIGIBLE_WEIGHT, Shaded, powi, shade_hit};
-use super::vec3::V3;
+use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{Material, Object, Shape};
 use glam::DVec3;
 

@@ -9,12 +9,10 @@ pub mod accel;
 pub mod glass;
 pub mod intersect;
 pub mod kernel;
-pub mod lanes;
 pub mod precision;
 mod rows;
 pub mod sample;
 pub mod shade;
-pub mod vec3;
 
 use crate::frame::Frame;
 use crate::scene::Scene;

@@ -9,8 +9,7 @@
 use super::World;
 use super::accel::{FromOrigin, Nearest, Rays};
 use super::intersect::Ray;
-use super::lanes::{F64x1, Lanes, MAX_LANES, Mask};
-use super::vec3::V3;
+use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{Light, Material, Shape};
 use glam::DVec3;
 
