@@ -6,28 +6,17 @@
 
 use crate::claim::{Attempt, Claims};
 use crate::frame::Frame;
-use crate::output::{
-    self, FileFormat, FrameMeta, fingerprint, pattern::Pattern, stream::StreamFormat,
-};
+use crate::output::{self, Files, RunIdentity, stream::StreamFormat};
 use crate::progress::Progress;
 use crate::sequence::Sequence;
-use crate::shutter::Exposure;
+use crate::shutter::{Exposure, FrameView};
+use crate::signals::{interrupt_code, interrupted, signal_name};
 use crate::tracer::{self, Settings, World};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
-
-use crate::signals::signal_name;
-pub use crate::signals::{install_interrupt_handler, interrupt_code, interrupted};
 use std::sync::{Arc, mpsc};
 use std::time::{Duration, Instant};
-
-/// Where frame files go and in which format.
-#[derive(Clone)]
-pub struct Files {
-    pub pattern: Pattern,
-    pub format: FileFormat,
-}
 
 /// One frame of a run: its number, and whether its file must be written (with a stream, frames
 /// whose files are up to date are still rendered for the stream but not rewritten).
@@ -225,9 +214,7 @@ fn spawner<'a>(
     let seq = Arc::clone(&job.sequence);
     let world = Arc::new(World::new(seq.scene.clone()));
     let files = job.files.clone();
-    let run_hash = files
-        .as_ref()
-        .map(|f| fingerprint::of_run(&seq.scene, &seq.settings, &f.format));
+    let identity = files.as_ref().map(|f| RunIdentity::new(&seq, &f.format));
     let (stream, cancel) = (job.stream, Arc::clone(cancel));
     move |task| {
         let (tx, seq, world, cancel) = (
@@ -238,7 +225,7 @@ fn spawner<'a>(
         );
         let files = files.clone();
         pool.spawn(move || {
-            let files = files.as_ref().zip(run_hash.as_ref());
+            let files = files.as_ref().zip(identity.as_ref());
             let _ = tx.send((
                 task.frame,
                 produce(&world, &seq, task, files, stream, &cancel),
@@ -301,7 +288,7 @@ impl Delivery<'_> {
         let (Some(claims), Some(files)) = (&self.job.claims, &self.job.files) else {
             return true;
         };
-        match claims.try_claim(&files.pattern.frame_path(n)) {
+        match claims.try_claim(&files.frame_path(n)) {
             Ok(Attempt::Claimed) => {
                 self.claimed.push((n, Instant::now()));
                 true
@@ -311,7 +298,7 @@ impl Delivery<'_> {
                 false
             }
             Err(e) => {
-                let path = Claims::path(&files.pattern.frame_path(n));
+                let path = Claims::path(&files.frame_path(n));
                 self.stop
                     .get_or_insert(Err(RunError::Claim { path, source: e }));
                 false
@@ -325,7 +312,7 @@ impl Delivery<'_> {
         };
         for (n, last) in &mut self.claimed {
             if last.elapsed() >= claims.heartbeat_every() {
-                claims.heartbeat(&files.pattern.frame_path(*n));
+                claims.heartbeat(&files.frame_path(*n));
                 *last = Instant::now();
             }
         }
@@ -333,7 +320,7 @@ impl Delivery<'_> {
 
     fn release(&mut self, n: u64) {
         if let (Some(claims), Some(files)) = (&self.job.claims, &self.job.files) {
-            claims.release(&files.pattern.frame_path(n));
+            claims.release(&files.frame_path(n));
             self.claimed.retain(|(f, _)| *f != n);
         }
     }
@@ -352,7 +339,7 @@ impl Delivery<'_> {
             }
         };
         if let (Some(bytes), Some(files)) = (&done.file, &self.job.files) {
-            let path = files.pattern.frame_path(frame);
+            let path = files.frame_path(frame);
             let result = output::atomic::write_atomic(&path, bytes);
             self.release(frame);
             if let Err(source) = result {
@@ -415,21 +402,22 @@ fn produce(
     world: &World,
     seq: &Sequence,
     task: Task,
-    files: Option<(&Files, &fingerprint::Hasher)>,
+    files: Option<(&Files, &RunIdentity)>,
     stream: Option<(StreamFormat, bool)>,
     cancel: &AtomicBool,
 ) -> Produced {
     let start = Instant::now();
     let n = task.frame;
-    let exposure = Exposure::of_frame(&seq.timeline, seq.settings.shutter, n)
-        .map_err(|source| RunError::Camera { frame: n, source })?;
-    let Some(frame) = tracer::render_or_stop(world, &exposure, &seq.settings, n, cancel) else {
+    let view = FrameView::of_frame(&seq.timeline, seq.settings.shutter, n);
+    let exposure =
+        (view.exposure.as_ref()).map_err(|&source| RunError::Camera { frame: n, source })?;
+    let Some(frame) = tracer::render_or_stop(world, exposure, &seq.settings, n, cancel) else {
         return Ok(None);
     };
     let file = match files.filter(|_| task.write_file) {
-        Some((files, run_hash)) => {
-            let meta = frame_meta(seq, n, run_hash);
-            let path = files.pattern.frame_path(n);
+        Some((files, identity)) => {
+            let meta = identity.meta(&view);
+            let path = files.frame_path(n);
             Some(
                 output::encode_file(&frame, &files.format, &meta)
                     .map_err(|message| RunError::Encode { path, message })?,
@@ -450,18 +438,6 @@ fn produce(
         file,
         stream,
     }))
-}
-
-pub fn frame_meta(seq: &Sequence, n: u64, run_hash: &fingerprint::Hasher) -> FrameMeta {
-    FrameMeta {
-        frame: n,
-        time: seq.timeline.time_of(n),
-        fps: seq.timeline.fps,
-        fingerprint: fingerprint::of_frame(run_hash, n, &seq.timeline, seq.settings.shutter),
-        matrices: crate::camera::Camera::new(&seq.timeline.pose_of(n))
-            .ok()
-            .map(|c| c.exr_matrices(seq.settings.width, seq.settings.height)),
-    }
 }
 
 /// Puts stream bytes on stdout strictly in frame order, holding early arrivals.

@@ -3,15 +3,17 @@
 mod camera;
 mod render;
 
-use crate::Error;
+use crate::cli::job::JobError;
 use crate::cli::{BenchArgs, CheckArgs, Cli, Command, MeasureArgs, PreviewArgs};
 use crate::console::{self, printable};
 use crate::output;
 use crate::scene::{Light, Shape};
-use crate::sequence::{self, Sequence};
+use crate::schedule::RunError;
+use crate::sequence::{self, LoadError, Sequence};
 use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
 use std::path::Path;
 
+/// The whole program behind the command line: `main` maps the error to its exit code.
 pub fn run(cli: Cli) -> Result<(), Error> {
     match cli.command {
         Command::Render(args) => render::render(args),
@@ -21,6 +23,48 @@ pub fn run(cli: Cli) -> Result<(), Error> {
         Command::Camera(args) => camera::camera(args),
         Command::Measure(args) => measure(args),
         Command::Bench(args) => bench(args),
+    }
+}
+
+/// Everything that ends a run early, with the exit code it maps to.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The sequence file or a flag is wrong: nothing was rendered (exit 2).
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    /// The command line asks for something impossible (exit 2).
+    #[error("{0}")]
+    Usage(String),
+    /// Rendering or writing failed (exit 1).
+    #[error("{0}")]
+    Failed(String),
+    /// A run stopped short: a frame could not be rendered, encoded or written (exit 1).
+    #[error(transparent)]
+    Run(#[from] RunError),
+    /// `status` found frames that are not up to date (exit 1).
+    #[error("{0}")]
+    Incomplete(String),
+    /// Ctrl-C or SIGTERM: the exit code is 128 + the signal (130 for SIGINT, 143 for SIGTERM).
+    #[error("{0}")]
+    Interrupted(String, u8),
+}
+
+impl Error {
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Error::Load(_) | Error::Usage(_) => 2,
+            Error::Failed(_) | Error::Run(_) | Error::Incomplete(_) => 1,
+            Error::Interrupted(_, code) => *code,
+        }
+    }
+}
+
+impl From<JobError> for Error {
+    fn from(e: JobError) -> Error {
+        match e {
+            JobError::Load(e) => Error::Load(e),
+            JobError::Usage(text) => Error::Usage(text),
+        }
     }
 }
 

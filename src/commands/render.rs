@@ -1,24 +1,24 @@
 //! `render` and `status`: the same job description (sequence, overrides, frames, shard,
 //! format) either rendered or only inspected.
 
-use super::{out, shown};
-use crate::Error;
+use super::{Error, out, shown};
 use crate::claim::{self, Claims, Held};
 use crate::cli::job::Job as JobSpec;
 use crate::cli::{ProgressFormat, RenderArgs};
 use crate::frameset::FrameSet;
-use crate::output::{self, stream::StreamFormat};
+use crate::output::{self, Files, stream::StreamFormat};
 use crate::plan::{self, Plan, State};
 use crate::progress::Progress;
-use crate::schedule::{self, Files, Job, Outcome, RunError, Task};
+use crate::schedule::{self, Job, Outcome, RunError, Task};
 use crate::sequence::Sequence;
+use crate::signals;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Makes the frames' directory and removes this job's temporaries that processes which are
 /// gone left there.
 fn prepare(files: &Files, frames: &FrameSet) -> Result<(), Error> {
-    let dir = plan::directory(&files.pattern.frame_path(0));
+    let dir = plan::directory(&files.frame_path(0));
     std::fs::create_dir_all(&dir)
         .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
     output::atomic::clean_leftovers(&dir, &files.pattern, frames);
@@ -70,7 +70,11 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     for w in &warnings {
         progress.warn(&format!("warning: {w}"));
     }
-    progress.start(plan.as_ref(), frames.len());
+    let planned = plan.as_ref().map(|p| (p.summary(), p.counts()));
+    let planned = planned
+        .as_ref()
+        .map(|(summary, counts)| (summary.as_str(), &counts[..]));
+    progress.start(planned, frames.len());
     if let (Some(plan), Some(files)) = (&plan, &files) {
         report_skipped(&progress, plan, files);
     }
@@ -118,7 +122,7 @@ fn run_job(
         .filter(|t| t.write_file)
         .for_each(|t| written.push(t.frame));
     let (seq, files) = (Arc::clone(&job.sequence), job.files.clone());
-    schedule::install_interrupt_handler();
+    signals::install_interrupt_handler();
     let outcome = match job.claims.is_some() {
         true => cooperate(pool, job, frames, progress),
         false => schedule::run_on(pool, job, progress),
@@ -153,13 +157,7 @@ fn verify(seq: &Sequence, written: &FrameSet, files: &Files) -> Result<(), Error
     bad.sort_by_key(|(n, _)| *n);
     let bad: Vec<String> = bad
         .iter()
-        .map(|(n, s)| {
-            format!(
-                "{} ({})",
-                files.pattern.frame_path(*n).display(),
-                describe(s)
-            )
-        })
+        .map(|(n, s)| format!("{} ({})", files.frame_path(*n).display(), describe(s)))
         .collect();
     Err(Error::Failed(format!(
         "frames written by this run changed before it ended: {}; run the same command again to render them",
@@ -206,7 +204,7 @@ fn cooperate(
             return Ok(outcome);
         };
         written += w;
-        if schedule::interrupted() {
+        if signals::interrupted() {
             return Ok(Outcome::Interrupted {
                 written,
                 streamed: 0,
@@ -244,7 +242,7 @@ fn report_waiting(progress: &Progress, files: &Files, held: &[u64]) {
     let claims: Vec<Held> = held
         .iter()
         .take(3)
-        .map(|&n| claim::held(&files.pattern.frame_path(n)))
+        .map(|&n| claim::held(&files.frame_path(n)))
         .collect();
     progress.waiting(&set.to_string(), held.len(), &claims);
 }
@@ -295,7 +293,7 @@ fn report_skipped(progress: &Progress, plan: &Plan, files: &Files) {
     if plan.force {
         return;
     }
-    let path = |n| files.pattern.frame_path(n).display().to_string();
+    let path = |n| files.frame_path(n).display().to_string();
     if progress.reports_skipped() {
         for n in plan.up_to_date.iter() {
             progress.frame_skipped(n, &path(n), "up-to-date");
@@ -393,13 +391,13 @@ fn finish(
         }
         Outcome::Interrupted { written, streamed } => Err(Error::Interrupted(
             interrupted_summary(written, streamed, plan, streaming),
-            schedule::interrupt_code(),
+            signals::interrupt_code(),
         )),
         // Ctrl-C in `rayreel … | ffmpeg …` reaches both: ffmpeg closing the pipe is then
         // the interruption, not a reader that had enough.
         Outcome::ReaderClosed { streamed } if reader_was_interrupted() => Err(Error::Interrupted(
             interrupted_summary(0, streamed, None, true),
-            schedule::interrupt_code(),
+            signals::interrupt_code(),
         )),
         Outcome::ReaderClosed { streamed } => {
             crate::console::note(&format!(
@@ -416,12 +414,12 @@ fn finish(
 fn reader_was_interrupted() -> bool {
     let start = Instant::now();
     while start.elapsed() < Duration::from_millis(200) {
-        if schedule::interrupted() {
+        if signals::interrupted() {
             return true;
         }
         std::thread::sleep(Duration::from_millis(10));
     }
-    schedule::interrupted()
+    signals::interrupted()
 }
 
 /// `1 frame`, `3 frames`.
@@ -436,7 +434,7 @@ pub fn status(args: RenderArgs) -> Result<(), Error> {
     let files = spec.files(&args.job)?;
     let (seq, frames) = (spec.seq, spec.frames);
     let plan = plan::plan(&seq, &frames, &files, false);
-    let dir = plan::directory(&files.pattern.frame_path(0));
+    let dir = plan::directory(&files.frame_path(0));
     let mut lines = vec![format!("{}: {}", shown(&dir), plan.status_line())];
     for (label, set) in plan.by_state() {
         if !set.is_empty() {

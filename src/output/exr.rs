@@ -3,29 +3,23 @@
 //! 1e10 for background, always 32-bit), ZIP compression, and header attributes for the
 //! frame number, time, fps, fingerprint and the standard `worldToCamera` and `worldToNDC`.
 
-use super::{Existing, Expected, FileFormat, FrameMeta, fingerprint};
+use super::fingerprint;
+use super::format::{Existing, Expected, ExrPrecision, FileFormat};
+use super::identity::FrameMeta;
 use crate::frame::Frame;
 use exr::prelude::*;
 use std::io::Cursor;
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
-pub enum Precision {
-    /// 16-bit half floats.
-    Half,
-    /// 32-bit floats.
-    Float,
-}
-
 pub fn encode(
     frame: &Frame,
-    precision: Precision,
+    precision: ExrPrecision,
     meta: &FrameMeta,
 ) -> std::result::Result<Vec<u8>, String> {
     let (w, h) = (frame.width as usize, frame.height as usize);
     let plane = |c: usize| -> Vec<f32> { frame.rgb.iter().skip(c).step_by(3).copied().collect() };
     let samples = |v: Vec<f32>| match precision {
-        Precision::Half => FlatSamples::F16(v.into_iter().map(f16::from_f32).collect()),
-        Precision::Float => FlatSamples::F32(v),
+        ExrPrecision::Half => FlatSamples::F16(v.into_iter().map(f16::from_f32).collect()),
+        ExrPrecision::Float => FlatSamples::F32(v),
     };
     let mut channels = SmallVec::<[AnyChannel<FlatSamples>; 4]>::new();
     for (name, c) in [("R", 0), ("G", 1), ("B", 2)] {
@@ -155,7 +149,7 @@ pub fn inspect(bytes: &[u8], expected: &Expected) -> Existing {
     let float = matches!(
         expected.format,
         FileFormat::Exr {
-            precision: Precision::Float
+            precision: ExrPrecision::Float
         }
     );
     let colour = |name: &str| {

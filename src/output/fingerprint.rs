@@ -4,12 +4,10 @@
 //! attribute), so a frame describes itself wherever it is copied, and shards on a shared
 //! directory need no common manifest.
 
+use super::format::{ExrPrecision, FileFormat};
 use crate::camera::{Camera, Pose};
-use crate::output::FileFormat;
-use crate::output::exr::Precision;
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
-use crate::shutter::{Exposure, Shutter};
-use crate::timeline::Timeline;
+use crate::shutter::FrameView;
 use crate::tracer::{Adaptive, Sampler, Settings};
 use crate::transfer::Encoding;
 use glam::DVec3;
@@ -70,15 +68,15 @@ pub fn of_run(scene: &Scene, settings: &Settings, format: &FileFormat) -> Hasher
 }
 
 /// The fingerprint of one frame: the run's hash extended with the frame's number (its
-/// samples are seeded from it), its camera at the frame time, and what its exposure adds: the
-/// lens when open, and the camera at every instant of the shutter's open interval when the
+/// samples are seeded from it), its camera pose at the frame time, and what its exposure adds:
+/// the lens when open, and the camera at every instant of the shutter's open interval when the
 /// camera moves while it is open (a still camera gives the same image with a shutter or
 /// without, and the same fingerprint).
-pub fn of_frame(run: &Hasher, n: u64, timeline: &Timeline, shutter: Option<Shutter>) -> String {
+pub fn of_frame(run: &Hasher, view: &FrameView) -> String {
     let mut h = *run;
-    n.canon(&mut h);
-    timeline.pose_of(n).canon(&mut h);
-    match Exposure::of_frame(timeline, shutter, n) {
+    view.frame.canon(&mut h);
+    view.pose.canon(&mut h);
+    match &view.exposure {
         Ok(e) => {
             let lens = (e.camera.lens_radius > 0.0)
                 .then_some([e.camera.lens_radius, e.camera.focus_distance]);
@@ -303,7 +301,7 @@ impl Canon for FileFormat {
         match self {
             FileFormat::Png { sixteen_bit, .. } => tagged(h, 0, &[sixteen_bit]),
             FileFormat::Exr { precision } => {
-                let float = *precision == Precision::Float;
+                let float = *precision == ExrPrecision::Float;
                 tagged(h, 1, &[&float])
             }
         }
@@ -330,6 +328,8 @@ canon_struct!(Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shutter::Shutter;
+    use crate::timeline::Timeline;
 
     /// A still camera at (x, 0, 1) looking at the origin, with a lens of `aperture`.
     fn still(x: f64, aperture: f64) -> Timeline {
@@ -372,7 +372,7 @@ mod tests {
         };
         let png = FileFormat::Png {
             sixteen_bit: false,
-            compression: crate::output::png::Compression::Fast,
+            compression: crate::output::format::Compression::Fast,
         };
         let run = of_run(&scene, &settings, &png);
         let mut bytes = Vec::new();
@@ -393,7 +393,9 @@ mod tests {
         assert_eq!(run.hex(), Hasher::new().write(&bytes).hex());
         // The frame's number, camera and lens each change it; a shutter on a still camera
         // and the compression do not.
-        let at = |x, aperture, n, shutter| of_frame(&run, n, &still(x, aperture), shutter);
+        let at = |x, aperture, n, shutter| {
+            of_frame(&run, &FrameView::of_frame(&still(x, aperture), shutter, n))
+        };
         let open = Some(Shutter {
             angle: 180.0,
             offset: 0.0,
@@ -404,7 +406,7 @@ mod tests {
         assert_eq!(at(0.0, 0.0, 0, None), at(0.0, 0.0, 0, open));
         let best = FileFormat::Png {
             sixteen_bit: false,
-            compression: crate::output::png::Compression::Best,
+            compression: crate::output::format::Compression::Best,
         };
         assert_eq!(run.hex(), of_run(&scene, &settings, &best).hex());
         // f32 appends the byte 2 after the encoding.

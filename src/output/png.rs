@@ -3,20 +3,12 @@
 //! for readers that know only those; linear: `gAMA` 1.0), with the fingerprint in a tEXt
 //! chunk ahead of the image data; and the check of an existing file.
 
-use super::{Existing, Expected, fingerprint};
+use super::fingerprint;
+pub use super::format::Compression;
+use super::format::{Existing, Expected};
 use crate::frame::Frame;
 use crate::transfer::Encoding;
 use png::{ScaledFloat, SourceChromaticities};
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
-pub enum Compression {
-    /// Quick deflate: the default, so encoding never holds back rendering.
-    Fast,
-    /// The png crate's balanced level.
-    Default,
-    /// Smallest files, slowest.
-    Best,
-}
 
 pub fn encode(
     frame: &Frame,

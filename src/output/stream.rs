@@ -2,7 +2,8 @@
 //! alpha), or a sequence of PNGs.
 //! Nothing but frame bytes is ever written here.
 
-use super::png::{self, Compression};
+use super::format::Compression;
+use super::png;
 use crate::frame::Frame;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]

@@ -29,7 +29,6 @@ pub use settings::{
 pub use timeline::MAX_FIRST_FRAME;
 
 use crate::camera::{Camera, Degenerate, Pose};
-use crate::output::{atomic, pattern::Pattern};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
 use crate::shutter::Shutter;
 use crate::timeline::{Ease, Key, Timeline};

@@ -2,6 +2,7 @@
 //! and the command line are held to.
 
 use super::*;
+use crate::pattern::{NAME_MAX, Pattern};
 
 pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
     let check = |path: &str, r: Result<u32, String>| r.or_else(|m| invalid(path, m));
@@ -209,12 +210,12 @@ pub(crate) fn output_pattern(output: &str, last_frame: u64) -> Result<Pattern, S
     let last = pattern.frame_path(last_frame);
     for part in last.iter() {
         let part = part.to_string_lossy();
-        if part.len() > atomic::NAME_MAX {
+        if part.len() > NAME_MAX {
             return Err(format!(
                 "the name `{}` is {} bytes; a file or directory name may have at most {}",
                 abbreviated(&part),
                 part.len(),
-                atomic::NAME_MAX
+                NAME_MAX
             ));
         }
     }

@@ -5,9 +5,10 @@
 //! and fields of 4 to 100 000 spheres for the acceleration structure.
 
 use crate::frame::Frame;
-use crate::output::{FileFormat, pattern::Pattern, png::Compression, stream::StreamFormat};
+use crate::output::{Compression, FileFormat, Files, stream::StreamFormat};
+use crate::pattern::Pattern;
 use crate::progress::Progress;
-use crate::schedule::{self, Files, Job, Task};
+use crate::schedule::{self, Job, Task};
 use crate::sequence::{self, Sequence};
 use crate::shutter::Exposure;
 use crate::tracer::{self, World};

@@ -5,6 +5,9 @@
 
 use std::path::PathBuf;
 
+/// The longest file name (one path component) Linux file systems take, in bytes.
+pub const NAME_MAX: usize = 255;
+
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Pattern {
     prefix: String,
