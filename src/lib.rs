@@ -16,6 +16,7 @@ pub mod progress;
 pub mod scene;
 pub mod schedule;
 pub mod sequence;
+pub mod settings;
 pub mod shutter;
 pub mod signals;
 pub mod timeline;

@@ -207,7 +207,7 @@ pub struct JobArgs {
     /// Arithmetic of the tracer: f64, or f32 at about twice the speed (replaces
     /// render.precision).
     #[arg(long, value_enum)]
-    pub precision: Option<crate::tracer::Precision>,
+    pub precision: Option<crate::settings::Precision>,
 }
 
 /// `render`'s options; `status` takes them too and ignores those that only shape a run.

@@ -267,7 +267,7 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
 }
 
 /// The `picture:` line: sampling, encoding, exposure and alpha, what decides how frames look.
-fn picture(s: &crate::tracer::Settings) -> String {
+fn picture(s: &crate::settings::Settings) -> String {
     let sampling = match s.adaptive {
         Some(a) => format!(
             "{} to {} samples (adaptive, threshold {})",

@@ -7,8 +7,8 @@
 use super::format::{ExrPrecision, FileFormat};
 use crate::camera::{Camera, Pose};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
+use crate::settings::{Adaptive, Precision, Sampler, Settings};
 use crate::shutter::FrameView;
-use crate::tracer::{Adaptive, Sampler, Settings};
 use crate::transfer::Encoding;
 use glam::DVec3;
 
@@ -284,7 +284,7 @@ impl Canon for Settings {
         }]);
         // Optional, so every f64 frame keeps the fingerprint it had: f32 adds the byte 2,
         // which no file-format tag (0, 1) that follows the settings takes.
-        if *precision == crate::tracer::Precision::F32 {
+        if *precision == Precision::F32 {
             h.write(&[2]);
         }
     }
@@ -362,7 +362,7 @@ mod tests {
             alpha: false,
             exposure: 0.0,
             encoding: Encoding::Srgb,
-            precision: crate::tracer::Precision::F64,
+            precision: Precision::F64,
         };
         let scene = Scene {
             objects: Vec::new(),
@@ -411,7 +411,7 @@ mod tests {
         assert_eq!(run.hex(), of_run(&scene, &settings, &best).hex());
         // f32 appends the byte 2 after the encoding.
         let f32 = Settings {
-            precision: crate::tracer::Precision::F32,
+            precision: Precision::F32,
             ..settings
         };
         let n = bytes.len();

@@ -30,9 +30,9 @@ pub use timeline::MAX_FIRST_FRAME;
 
 use crate::camera::{Camera, Degenerate, Pose};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
+use crate::settings::{Adaptive, Sampler, Settings};
 use crate::shutter::Shutter;
 use crate::timeline::{Ease, Key, Timeline};
-use crate::tracer::{Adaptive, Sampler, Settings};
 use glam::DVec3;
 pub use raw::Quality;
 use std::fmt::Display;
