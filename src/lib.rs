@@ -23,3 +23,4 @@ pub mod timeline;
 pub mod tools;
 pub mod tracer;
 pub mod transfer;
+pub mod warnings;

@@ -27,7 +27,9 @@ pub struct Task {
     pub write_file: bool,
 }
 
-pub struct Job {
+/// What a run renders and where it goes: the frames (tasks), the file sink, the stream, the
+/// threads and, when processes cooperate, their claims.
+pub struct Batch {
     pub sequence: Arc<Sequence>,
     /// Ascending frame numbers, each inside the timeline.
     pub tasks: Vec<Task>,
@@ -56,7 +58,8 @@ pub enum Outcome {
 /// behind rendering, few enough that memory stays a handful of frames.
 const EXTRA_IN_FLIGHT: usize = 2;
 
-struct Done {
+/// A frame a worker finished: how long it took and its encoded bytes for each sink.
+struct Encoded {
     seconds: f64,
     file: Option<Vec<u8>>,
     stream: Option<Vec<u8>>,
@@ -64,7 +67,7 @@ struct Done {
 
 /// The I/O side of a run: everything this thread does with finished frames.
 struct Delivery<'a> {
-    job: &'a Job,
+    batch: &'a Batch,
     progress: &'a mut Progress,
     stream: Option<Reorder>,
     written: usize,
@@ -86,7 +89,7 @@ impl From<RunError> for String {
 }
 
 /// What a worker sends back: the frame's bytes, `None` if it was cancelled, or why it failed.
-type Produced = Result<Option<Done>, RunError>;
+type Produced = Result<Option<Encoded>, RunError>;
 
 /// Why a run stopped short of its frames (the command maps every one to exit 1).
 #[derive(Debug, thiserror::Error)]
@@ -131,8 +134,8 @@ const TICK: Duration = Duration::from_millis(100);
 /// so this only matters while one is being encoded) before it leaves them behind.
 const STOP_GRACE: Duration = Duration::from_secs(2);
 
-pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, RunError> {
-    run_on(&worker_pool(job.threads)?, job, progress)
+pub fn run(batch: Batch, progress: &mut Progress) -> Result<Outcome, RunError> {
+    run_on(&worker_pool(batch.threads)?, batch, progress)
 }
 
 /// The worker threads of a run; an error when the machine cannot start that many.
@@ -147,27 +150,27 @@ pub fn worker_pool(threads: usize) -> Result<rayon::ThreadPool, RunError> {
 /// `run` on threads already started (claim mode runs several passes on them).
 pub fn run_on(
     pool: &rayon::ThreadPool,
-    mut job: Job,
+    mut batch: Batch,
     progress: &mut Progress,
 ) -> Result<Outcome, RunError> {
     return_frame_buffers_to_the_os();
-    let window = match job.stream {
+    let window = match batch.stream {
         // A stream has its order to keep: one frame rendering (on every thread) while the one
         // before is written keeps memory to two frames whatever the reader does.
         Some(_) => 2,
-        None => job.threads + EXTRA_IN_FLIGHT,
+        None => batch.threads + EXTRA_IN_FLIGHT,
     };
     let (tx, rx) = mpsc::channel::<(u64, Produced)>();
-    let out = job
+    let out = batch
         .stream_out
         .take()
         .unwrap_or_else(|| Box::new(std::io::stdout()));
     let mut d = Delivery {
-        job: &job,
+        batch: &batch,
         progress,
-        stream: job
+        stream: batch
             .stream
-            .map(|_| Reorder::new(&job.tasks, StreamWriter::start(out))),
+            .map(|_| Reorder::new(&batch.tasks, StreamWriter::start(out))),
         written: 0,
         held: Vec::new(),
         claimed: Vec::new(),
@@ -175,8 +178,8 @@ pub fn run_on(
         cancel: Arc::new(AtomicBool::new(false)),
         signalled: None,
     };
-    let spawn = spawner(pool, &job, &d.cancel, tx);
-    let mut pending = job.tasks.iter().copied();
+    let spawn = spawner(pool, &batch, &d.cancel, tx);
+    let mut pending = batch.tasks.iter().copied();
     let mut in_flight = 0;
     loop {
         d.notice_signal(in_flight);
@@ -208,15 +211,15 @@ pub fn run_on(
 /// Starts one frame on the pool; its result comes back through `tx`.
 fn spawner<'a>(
     pool: &'a rayon::ThreadPool,
-    job: &Job,
+    batch: &Batch,
     cancel: &Arc<AtomicBool>,
     tx: mpsc::Sender<(u64, Produced)>,
 ) -> impl Fn(Task) + 'a {
-    let seq = Arc::clone(&job.sequence);
+    let seq = Arc::clone(&batch.sequence);
     let world = Arc::new(World::new(seq.scene.clone()));
-    let files = job.files.clone();
+    let files = batch.files.clone();
     let identity = files.as_ref().map(|f| RunIdentity::new(&seq, &f.format));
-    let (stream, cancel) = (job.stream, Arc::clone(cancel));
+    let (stream, cancel) = (batch.stream, Arc::clone(cancel));
     move |task| {
         let (tx, seq, world, cancel) = (
             tx.clone(),
@@ -286,7 +289,7 @@ impl Delivery<'_> {
 
     /// Claims frame `n` when cooperating; false if another process holds it.
     fn claim(&mut self, n: u64) -> bool {
-        let (Some(claims), Some(files)) = (&self.job.claims, &self.job.files) else {
+        let (Some(claims), Some(files)) = (&self.batch.claims, &self.batch.files) else {
             return true;
         };
         match claims.try_claim(&files.frame_path(n)) {
@@ -308,7 +311,7 @@ impl Delivery<'_> {
     }
 
     fn heartbeat(&mut self) {
-        let (Some(claims), Some(files)) = (&self.job.claims, &self.job.files) else {
+        let (Some(claims), Some(files)) = (&self.batch.claims, &self.batch.files) else {
             return;
         };
         for (n, last) in &mut self.claimed {
@@ -320,7 +323,7 @@ impl Delivery<'_> {
     }
 
     fn release(&mut self, n: u64) {
-        if let (Some(claims), Some(files)) = (&self.job.claims, &self.job.files) {
+        if let (Some(claims), Some(files)) = (&self.batch.claims, &self.batch.files) {
             claims.release(&files.frame_path(n));
             self.claimed.retain(|(f, _)| *f != n);
         }
@@ -339,7 +342,7 @@ impl Delivery<'_> {
                 return;
             }
         };
-        if let (Some(bytes), Some(files)) = (&done.file, &self.job.files) {
+        if let (Some(bytes), Some(files)) = (&done.file, &self.batch.files) {
             let path = files.frame_path(frame);
             let result = output::atomic::write_atomic(&path, bytes);
             self.release(frame);
@@ -434,7 +437,7 @@ fn produce(
         None => None,
     };
     frame.recycle();
-    Ok(Some(Done {
+    Ok(Some(Encoded {
         seconds: start.elapsed().as_secs_f64(),
         file,
         stream,

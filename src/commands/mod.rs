@@ -11,6 +11,7 @@ use crate::scene::{Light, Shape};
 use crate::schedule::RunError;
 use crate::sequence::{self, LoadError, Sequence};
 use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
+use crate::warnings;
 use std::path::Path;
 
 /// The whole program behind the command line: `main` maps the error to its exit code.
@@ -68,17 +69,8 @@ impl From<JobError> for Error {
     }
 }
 
-/// What a valid sequence still deserves a warning for: keys the film never shows, frames with
-/// the camera inside an object, f32 frames traced in f64.
-fn warnings(seq: &Sequence) -> Vec<String> {
-    let mut all = seq.warnings.clone();
-    all.extend(crate::tools::preview::inside_warnings(seq));
-    all.extend(crate::tools::preview::precision_warnings(seq));
-    all
-}
-
 fn print_warnings(seq: &Sequence) {
-    for w in warnings(seq) {
+    for w in warnings::for_sequence(seq) {
         eprintln!("warning: {w}");
     }
 }
@@ -104,7 +96,7 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
             }
             set.iter().collect()
         }
-        None => preview::evenly_spaced(seq.timeline.frame_count, args.tiles)
+        None => crate::frameset::evenly_spaced(seq.timeline.frame_count, args.tiles)
             .into_iter()
             .map(|n| n + first)
             .collect(),

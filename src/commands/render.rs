@@ -3,13 +3,13 @@
 
 use super::{Error, out, shown};
 use crate::claim::{self, Claims, Held};
-use crate::cli::job::Job as JobSpec;
+use crate::cli::job::Job;
 use crate::cli::{ProgressFormat, RenderArgs};
 use crate::frameset::FrameSet;
 use crate::output::{self, Files, stream::StreamFormat};
 use crate::plan::{self, Plan, State};
 use crate::progress::Progress;
-use crate::schedule::{self, Job, Outcome, RunError, Task};
+use crate::schedule::{self, Batch, Outcome, RunError, Task};
 use crate::sequence::Sequence;
 use crate::signals;
 use std::sync::Arc;
@@ -28,15 +28,15 @@ fn prepare(files: &Files, frames: &FrameSet) -> Result<(), Error> {
 pub fn render(args: RenderArgs) -> Result<(), Error> {
     // From here on every line on stderr is one JSON object, errors included.
     crate::console::set_json(args.progress == ProgressFormat::Json);
-    let spec = JobSpec::new(&args.job)?;
+    let spec = Job::new(&args.job)?;
     let sixteen_bit = spec.sixteen_bit;
-    let warnings = super::warnings(&spec.seq);
+    let warnings = crate::warnings::for_sequence(&spec.seq);
     // With --pipe the stream is the product; files come too only when asked for explicitly.
     let files = match args.pipe.is_none() || spec.output_given {
         true => Some(spec.files(&args.job)?),
         false => None,
     };
-    let JobSpec { seq, frames, .. } = spec;
+    let Job { seq, frames, .. } = spec;
     if args.claim && (files.is_none() || args.pipe.is_some()) {
         return Err(Error::Usage(
             "--claim shares frame files between processes; it cannot be combined with --pipe"
@@ -82,7 +82,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     let claims = args
         .claim
         .then(|| Arc::new(Claims::new(Duration::from_secs(args.claim_timeout))));
-    let job = Job {
+    let batch = Batch {
         sequence: Arc::new(seq),
         tasks,
         files,
@@ -91,7 +91,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         threads,
         claims,
     };
-    let outcome = run_job(&pool, job, &frames, &mut progress)?;
+    let outcome = run_job(&pool, batch, &frames, &mut progress)?;
     finish(outcome, plan.as_ref(), stream.is_some())
 }
 
@@ -109,23 +109,24 @@ fn workers(asked: Option<u16>) -> Result<(rayon::ThreadPool, usize), Error> {
     Ok((pool, threads))
 }
 
-/// Runs the job (cooperating through claims if asked), then checks what it wrote.
+/// Runs the batch (cooperating through claims if asked), then checks what it wrote.
 fn run_job(
     pool: &rayon::ThreadPool,
-    job: Job,
+    batch: Batch,
     frames: &FrameSet,
     progress: &mut Progress,
 ) -> Result<Result<Outcome, RunError>, Error> {
     let mut written = FrameSet::new();
-    job.tasks
+    batch
+        .tasks
         .iter()
         .filter(|t| t.write_file)
         .for_each(|t| written.push(t.frame));
-    let (seq, files) = (Arc::clone(&job.sequence), job.files.clone());
+    let (seq, files) = (Arc::clone(&batch.sequence), batch.files.clone());
     signals::install_interrupt_handler();
-    let outcome = match job.claims.is_some() {
-        true => cooperate(pool, job, frames, progress),
-        false => schedule::run_on(pool, job, progress),
+    let outcome = match batch.claims.is_some() {
+        true => cooperate(pool, batch, frames, progress),
+        false => schedule::run_on(pool, batch, progress),
     };
     progress.finish(matches!(outcome, Ok(Outcome::Interrupted { .. })));
     if let (Ok(Outcome::Complete { .. }), Some(files)) = (&outcome, &files) {
@@ -180,7 +181,7 @@ fn describe(s: &State) -> String {
 /// whose owner died or went silent.
 fn cooperate(
     pool: &rayon::ThreadPool,
-    mut job: Job,
+    mut batch: Batch,
     frames: &FrameSet,
     progress: &mut Progress,
 ) -> Result<Outcome, RunError> {
@@ -189,14 +190,14 @@ fn cooperate(
     loop {
         let outcome = schedule::run_on(
             pool,
-            Job {
-                tasks: std::mem::take(&mut job.tasks),
-                claims: job.claims.clone(),
-                files: job.files.clone(),
-                sequence: Arc::clone(&job.sequence),
+            Batch {
+                tasks: std::mem::take(&mut batch.tasks),
+                claims: batch.claims.clone(),
+                files: batch.files.clone(),
+                sequence: Arc::clone(&batch.sequence),
                 stream: None,
                 stream_out: None,
-                threads: job.threads,
+                threads: batch.threads,
             },
             progress,
         )?;
@@ -210,7 +211,7 @@ fn cooperate(
                 streamed: 0,
             });
         }
-        let files = job.files.as_ref().expect("claim mode has files");
+        let files = batch.files.as_ref().expect("claim mode has files");
         if !held.is_empty() {
             if told.is_none_or(|t| t.elapsed() >= WAITING_REPORT_EVERY) {
                 report_waiting(progress, files, &held);
@@ -218,16 +219,16 @@ fn cooperate(
             }
             std::thread::sleep(Duration::from_millis(500));
         }
-        let plan = plan::plan(&job.sequence, frames, files, false);
-        job.tasks = tasks(frames, Some(&plan), false);
-        if job.tasks.is_empty() {
+        let plan = plan::plan(&batch.sequence, frames, files, false);
+        batch.tasks = tasks(frames, Some(&plan), false);
+        if batch.tasks.is_empty() {
             return Ok(Outcome::Complete {
                 written,
                 held: Vec::new(),
             });
         }
         if held.is_empty() {
-            progress.add_total(job.tasks.len() as u64);
+            progress.add_total(batch.tasks.len() as u64);
         }
     }
 }
@@ -430,7 +431,7 @@ pub(crate) fn plural(n: u64, noun: &str) -> String {
 /// `rayreel status`: the completeness of the output against the sequence; exit 0 only when
 /// every selected frame is up to date.
 pub fn status(args: RenderArgs) -> Result<(), Error> {
-    let spec = JobSpec::for_status(&args.job)?;
+    let spec = Job::for_status(&args.job)?;
     let files = spec.files(&args.job)?;
     let (seq, frames) = (spec.seq, spec.frames);
     let plan = plan::plan(&seq, &frames, &files, false);

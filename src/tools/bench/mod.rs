@@ -8,7 +8,7 @@ use crate::frame::Frame;
 use crate::output::{Compression, FileFormat, Files, stream::StreamFormat};
 use crate::pattern::Pattern;
 use crate::progress::Progress;
-use crate::schedule::{self, Job, Task};
+use crate::schedule::{self, Batch, Task};
 use crate::sequence::{self, Sequence};
 use crate::shutter::Exposure;
 use crate::tracer::{self, World};
@@ -25,22 +25,22 @@ const TALK_POV: &str = include_str!("../../../sequences/bench/talk_orbit.pov");
 
 /// Median, min and max of some seconds.
 #[derive(Debug, Clone, Copy)]
-pub struct Timing {
+pub struct Spread {
     pub median: f64,
     pub min: f64,
     pub max: f64,
 }
 
-fn timing(mut t: Vec<f64>) -> Timing {
+fn timing(mut t: Vec<f64>) -> Spread {
     t.sort_by(f64::total_cmp);
-    Timing {
+    Spread {
         median: t[t.len() / 2],
         min: t[0],
         max: t[t.len() - 1],
     }
 }
 
-fn repeat(runs: usize, mut f: impl FnMut() -> Result<(), String>) -> Result<Timing, String> {
+fn repeat(runs: usize, mut f: impl FnMut() -> Result<(), String>) -> Result<Spread, String> {
     let mut t = Vec::with_capacity(runs);
     for _ in 0..runs {
         let start = Instant::now();
@@ -86,7 +86,7 @@ fn render_only(
     seq: &Sequence,
     threads: usize,
     runs: usize,
-) -> Result<(Timing, Frame), String> {
+) -> Result<(Spread, Frame), String> {
     let exposure = first_exposure(seq)?;
     let pool = pool(threads)?;
     let mut frame = None;
@@ -131,7 +131,7 @@ fn sequence_run(
         }),
         None => None,
     };
-    let job = Job {
+    let batch = Batch {
         sequence: Arc::new(seq.clone()),
         tasks: (0..frames)
             .map(|frame| Task {
@@ -146,7 +146,7 @@ fn sequence_run(
         claims: None,
     };
     let start = Instant::now();
-    schedule::run(job, &mut Progress::new(frames, frames, true))?;
+    schedule::run(batch, &mut Progress::new(frames, frames, true))?;
     Ok(start.elapsed().as_secs_f64())
 }
 
