@@ -6,7 +6,7 @@
 
 use crate::claim::{Attempt, Claims};
 use crate::frame::Frame;
-use crate::output::{self, Files, RunIdentity, stream::StreamFormat};
+use crate::output::{self, EncodeError, Files, RunIdentity, stream::StreamFormat};
 use crate::progress::Progress;
 use crate::sequence::Sequence;
 use crate::settings::Settings;
@@ -81,13 +81,6 @@ struct Delivery<'a> {
     signalled: Option<Instant>,
 }
 
-/// The tools around the pipeline (`measure`, `bench`) report failures as text.
-impl From<RunError> for String {
-    fn from(e: RunError) -> String {
-        e.to_string()
-    }
-}
-
 /// What a worker sends back: the frame's bytes, `None` if it was cancelled, or why it failed.
 type Produced = Result<Option<Encoded>, RunError>;
 
@@ -104,13 +97,13 @@ pub enum RunError {
         frame: u64,
         source: crate::shutter::NoCamera,
     },
-    #[error("{}: cannot encode: {message}", path.display())]
+    #[error("{}: cannot encode: {source}", path.display())]
     Encode {
         path: std::path::PathBuf,
-        message: String,
+        source: EncodeError,
     },
-    #[error("frame {frame}: cannot encode the stream: {message}")]
-    EncodeStream { frame: u64, message: String },
+    #[error("frame {frame}: cannot encode the stream: {source}")]
+    EncodeStream { frame: u64, source: EncodeError },
     #[error("{}: cannot write: {source}", path.display())]
     Write {
         path: std::path::PathBuf,
@@ -424,7 +417,7 @@ fn produce(
             let path = files.frame_path(n);
             Some(
                 output::encode_file(&frame, &files.format, &meta)
-                    .map_err(|message| RunError::Encode { path, message })?,
+                    .map_err(|source| RunError::Encode { path, source })?,
             )
         }
         None => None,
@@ -432,7 +425,7 @@ fn produce(
     let stream = match stream {
         Some((format, sixteen)) => Some(
             output::stream::encode(&frame, format, sixteen)
-                .map_err(|message| RunError::EncodeStream { frame: n, message })?,
+                .map_err(|source| RunError::EncodeStream { frame: n, source })?,
         ),
         None => None,
     };

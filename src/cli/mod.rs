@@ -6,7 +6,9 @@
 pub mod job;
 pub mod spec;
 
-pub use spec::{FrameSpec, ShardSpec, parse_frame_spec, parse_shard, parse_size, resolve_shard};
+pub use spec::{
+    FrameSpec, ShardSpec, SpecError, parse_frame_spec, parse_shard, parse_size, resolve_shard,
+};
 
 use crate::output::stream::StreamFormat;
 use crate::output::{Compression, ExrPrecision};

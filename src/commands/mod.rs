@@ -110,12 +110,12 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
         eprintln!("warning: {}", printable(w));
     }
     let plot_file = dir.join(format!("{}_path.png", seq.name));
-    preview::write_png(&plot_file, &plot).map_err(Error::Failed)?;
+    preview::write_png(&plot_file, &plot).map_err(|e| Error::Failed(e.to_string()))?;
     out(&format!("{}\n", shown(&plot_file)))?;
-    let (sheet, _) =
-        preview::contact_sheet(&seq, &frames, preview::TILE_WIDTH).map_err(Error::Failed)?;
+    let (sheet, _) = preview::contact_sheet(&seq, &frames, preview::TILE_WIDTH)
+        .map_err(|e| Error::Failed(e.to_string()))?;
     let sheet_file = dir.join(format!("{}_sheet.png", seq.name));
-    preview::write_png(&sheet_file, &sheet).map_err(Error::Failed)?;
+    preview::write_png(&sheet_file, &sheet).map_err(|e| Error::Failed(e.to_string()))?;
     out(&format!("{}\n", shown(&sheet_file)))?;
     problem.map_or(Ok(()), |p| Err(Error::Load(p)))
 }
@@ -388,8 +388,7 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
     let report =
         crate::tools::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
             eprintln!("  {line}")
-        })
-        .map_err(Error::Failed)?;
+        })?;
     out(&report.table())?;
     for (name, text) in [
         ("measure.csv", report.csv()),
@@ -414,7 +413,7 @@ fn bench(args: BenchArgs) -> Result<(), Error> {
     crate::tools::bench::run(&options, &mut |line| {
         let _ = console::print(&format!("{line}\n"));
     })
-    .map_err(Error::Failed)
+    .map_err(|e| Error::Failed(e.to_string()))
 }
 
 /// A folder `name` in the frames' directory (`frames/orbit/preview`).

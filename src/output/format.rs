@@ -41,16 +41,14 @@ impl FileFormat {
         sixteen_bit: bool,
         compression: Compression,
         precision: ExrPrecision,
-    ) -> Result<FileFormat, String> {
+    ) -> Result<FileFormat, UnsupportedType> {
         match ext {
             "png" => Ok(FileFormat::Png {
                 sixteen_bit,
                 compression,
             }),
             "exr" => Ok(FileFormat::Exr { precision }),
-            other => Err(format!(
-                "unsupported file type `.{other}` (use .png or .exr)"
-            )),
+            other => Err(UnsupportedType(other.to_string())),
         }
     }
 
@@ -64,6 +62,23 @@ impl FileFormat {
         };
         if alpha { (depth, 6, 4) } else { (depth, 2, 3) }
     }
+}
+
+/// A frame file extension rayreel does not write.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unsupported file type `.{0}` (use .png or .exr)")]
+pub struct UnsupportedType(pub String);
+
+/// Why a frame could not be turned into the bytes of a file or of the stream.
+#[derive(Debug, thiserror::Error)]
+pub enum EncodeError {
+    #[error(transparent)]
+    Png(#[from] png::EncodingError),
+    #[error(transparent)]
+    Exr(#[from] exr::error::Error),
+    /// The EXR header as written could not be parsed again to sort its attributes.
+    #[error("the EXR header could not be read back")]
+    ExrHeader,
 }
 
 /// What a frame file of this job must be: its size and format.

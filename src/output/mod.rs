@@ -12,7 +12,9 @@ pub mod identity;
 pub mod png;
 pub mod stream;
 
-pub use format::{Compression, Existing, Expected, ExrPrecision, FileFormat};
+pub use format::{
+    Compression, EncodeError, Existing, Expected, ExrPrecision, FileFormat, UnsupportedType,
+};
 pub use identity::{Files, FrameMeta, RunIdentity};
 
 use crate::frame::Frame;
@@ -23,7 +25,7 @@ pub fn encode_file(
     frame: &Frame,
     format: &FileFormat,
     meta: &FrameMeta,
-) -> Result<Vec<u8>, String> {
+) -> Result<Vec<u8>, EncodeError> {
     match *format {
         FileFormat::Png {
             sixteen_bit,

@@ -5,7 +5,7 @@
 
 use super::fingerprint;
 pub use super::format::Compression;
-use super::format::{Existing, Expected};
+use super::format::{EncodeError, Existing, Expected};
 use crate::frame::Frame;
 use crate::transfer::Encoding;
 use png::{ScaledFloat, SourceChromaticities};
@@ -15,7 +15,7 @@ pub fn encode(
     sixteen_bit: bool,
     compression: Compression,
     text: &[(&str, String)],
-) -> Result<Vec<u8>, String> {
+) -> Result<Vec<u8>, EncodeError> {
     let mut out = Vec::with_capacity(frame.rgb.len() / 2);
     let mut enc = png::Encoder::new(&mut out, frame.width, frame.height);
     enc.set_color(match frame.alpha {
@@ -29,8 +29,7 @@ pub fn encode(
         Compression::Best => png::Compression::High,
     });
     for (key, value) in text {
-        enc.add_text_chunk(key.to_string(), value.clone())
-            .map_err(|e| e.to_string())?;
+        enc.add_text_chunk(key.to_string(), value.clone())?;
     }
     let data: Vec<u8> = if sixteen_bit {
         enc.set_depth(png::BitDepth::Sixteen);
@@ -43,9 +42,9 @@ pub fn encode(
         enc.set_depth(png::BitDepth::Eight);
         frame.to_rgb8()
     };
-    let mut writer = enc.write_header().map_err(|e| e.to_string())?;
-    writer.write_image_data(&data).map_err(|e| e.to_string())?;
-    writer.finish().map_err(|e| e.to_string())?;
+    let mut writer = enc.write_header()?;
+    writer.write_image_data(&data)?;
+    writer.finish()?;
     Ok(out)
 }
 

@@ -205,7 +205,7 @@ pub(crate) fn output_pattern(output: &str, last_frame: u64) -> Result<Pattern, S
             output.replace('\0', "\\0")
         ));
     }
-    let pattern = Pattern::new(output, last_frame)?;
+    let pattern = Pattern::new(output, last_frame).map_err(|e| e.to_string())?;
     // No frame's path is longer than the last one's (numbers are padded to one width or not).
     let last = pattern.frame_path(last_frame);
     for part in last.iter() {

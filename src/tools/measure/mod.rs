@@ -6,7 +6,7 @@
 //! the f64 image (the reference itself is always f64).
 
 use crate::frame::Frame;
-use crate::schedule::render_with;
+use crate::schedule::{RunError, render_with};
 use crate::sequence::{Quality, Sequence, preset};
 use crate::tracer::{Adaptive, Precision, Sampler, Settings, World};
 use crate::transfer::Encoding;
@@ -99,13 +99,8 @@ pub struct Versus {
 
 /// Renders frame `n` with `settings` in place of the sequence's (building the geometry; the
 /// measurement itself builds it once for all its renders).
-pub fn render(seq: &Sequence, n: u64, settings: &Settings) -> Result<Frame, String> {
-    Ok(render_with(
-        &World::new(seq.scene.clone()),
-        seq,
-        n,
-        settings,
-    )?)
+pub fn render(seq: &Sequence, n: u64, settings: &Settings) -> Result<Frame, RunError> {
+    render_with(&World::new(seq.scene.clone()), seq, n, settings)
 }
 
 /// The reference `measure` compares against, for a scene whose paths are trees or not.
@@ -193,7 +188,7 @@ fn precision_rows(
     n: u64,
     runs: usize,
     ref_image: &[u8],
-) -> Result<Vec<Row>, String> {
+) -> Result<Vec<Row>, RunError> {
     let pair = precisions(&seq.settings);
     let mut times = [Vec::new(), Vec::new()];
     let mut out = [(Vec::new(), 0.0), (Vec::new(), 0.0)];
@@ -232,7 +227,7 @@ fn timed(
     s: &Settings,
     half: bool,
     runs: usize,
-) -> Result<(Vec<u8>, f64, Vec<f64>), String> {
+) -> Result<(Vec<u8>, f64, Vec<f64>), RunError> {
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..runs {
@@ -292,7 +287,7 @@ pub fn measure(
     n: u64,
     runs: usize,
     progress: &mut dyn FnMut(&str),
-) -> Result<Report, String> {
+) -> Result<Report, RunError> {
     let world = World::new(seq.scene.clone());
     let reference = reference_settings(&seq.settings, world.trees());
     let start = Instant::now();

@@ -48,7 +48,26 @@ use crate::timeline::{Path as TimelinePath, Timeline};
 use crate::tracer::World;
 use glam::DVec3;
 use image::{Rgb, RgbImage};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// Why a preview picture could not be made or written.
+#[derive(Debug, thiserror::Error)]
+pub enum PreviewError {
+    #[error("no frames to put on the contact sheet")]
+    NoFrames,
+    #[error("frame {frame} is outside the timeline, which has frames 0-{last}")]
+    OutsideTimeline { frame: u64, last: u64 },
+    #[error("{}: cannot encode: {source}", path.display())]
+    Encode {
+        path: PathBuf,
+        source: image::ImageError,
+    },
+    #[error("{}: cannot write: {source}", path.display())]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+}
 
 /// Default number of contact-sheet tiles.
 pub const DEFAULT_TILES: u64 = 12;
@@ -82,10 +101,18 @@ pub fn tile_height(seq: &Sequence, tile_w: u32) -> u32 {
 }
 
 /// Encodes `img` as PNG and writes it atomically (a complete file or none) to `path`.
-pub fn write_png(path: &Path, img: &RgbImage) -> Result<(), String> {
+pub fn write_png(path: &Path, img: &RgbImage) -> Result<(), PreviewError> {
     let mut bytes = std::io::Cursor::new(Vec::new());
+    let path_buf = || path.to_path_buf();
     img.write_to(&mut bytes, image::ImageFormat::Png)
-        .map_err(|e| format!("{}: cannot encode: {e}", path.display()))?;
-    crate::output::atomic::write_atomic(path, bytes.get_ref())
-        .map_err(|e| format!("{}: cannot write: {e}", path.display()))
+        .map_err(|source| PreviewError::Encode {
+            path: path_buf(),
+            source,
+        })?;
+    crate::output::atomic::write_atomic(path, bytes.get_ref()).map_err(|source| {
+        PreviewError::Write {
+            path: path_buf(),
+            source,
+        }
+    })
 }
