@@ -5,8 +5,7 @@
 //! centre, along normalize(forward + x·tan(fov/2)·right + y·tan(fov/2)·up). With the camera at
 //! (0,0,1) looking at the origin and fov 90 that is exactly the talk's screen on the plane z = 0.
 
-use crate::tracer::lanes::{F64x1, Lanes};
-use crate::tracer::vec3::V3;
+use crate::lanes::{F64x1, Lanes, V3};
 use glam::{DMat4, DVec3};
 
 /// Where the camera is and where it looks, as the sequence file and the timeline give it.

@@ -18,7 +18,7 @@ pub fn error_line(message: &str, exit_code: u8) -> String {
     match JSON.load(Ordering::Relaxed) {
         true => format!(
             "{{\"event\": \"error\", \"text\": {}, \"exit_code\": {exit_code}}}",
-            crate::progress::quote(message)
+            quote(message)
         ),
         false => format!("rayreel: {}", printable(message)),
     }
@@ -36,10 +36,7 @@ pub fn warning(text: &str) {
 
 fn line(event: &str, text: &str) {
     match JSON.load(Ordering::Relaxed) {
-        true => eprintln!(
-            "{{\"event\": \"{event}\", \"text\": {}}}",
-            crate::progress::quote(text)
-        ),
+        true => eprintln!("{{\"event\": \"{event}\", \"text\": {}}}", quote(text)),
         false => eprintln!("{}", printable(text)),
     }
 }
@@ -79,6 +76,23 @@ pub fn printable_lines(s: &str) -> String {
 
 fn hostile(c: char) -> bool {
     c.is_control() || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+}
+
+/// A JSON string literal.
+pub fn quote(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
 }
 
 #[cfg(test)]

@@ -289,9 +289,44 @@ impl fmt::Display for FrameSet {
     }
 }
 
+/// `n` frames spread evenly over `0..frame_count`, first and last included:
+/// n_k = round(k·(frame_count − 1)/(n − 1)), ascending and without repeats.
+pub fn evenly_spaced(frame_count: u64, n: u64) -> Vec<u64> {
+    if frame_count == 0 || n == 0 {
+        return Vec::new();
+    }
+    if n == 1 {
+        return vec![0];
+    }
+    // Steps shorter than one frame round onto every frame: skip building n values.
+    if n >= frame_count {
+        return (0..frame_count).collect();
+    }
+    let (last, d) = (u128::from(frame_count - 1), u128::from(n - 1));
+    // Integer rounding (half up) so the choice is exact for any frame count.
+    let mut out: Vec<u64> = (0..u128::from(n))
+        .map(|k| ((2 * k * last + d) / (2 * d)) as u64)
+        .collect();
+    out.dedup();
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn evenly_spaced_hits_both_ends() {
+        assert_eq!(evenly_spaced(144, 12).first(), Some(&0));
+        assert_eq!(evenly_spaced(144, 12).last(), Some(&143));
+        assert_eq!(evenly_spaced(144, 12).len(), 12);
+        assert_eq!(evenly_spaced(5, 3), vec![0, 2, 4]);
+        assert_eq!(evenly_spaced(4, 12), vec![0, 1, 2, 3]);
+        assert_eq!(evenly_spaced(10, 1), vec![0]);
+        assert_eq!(evenly_spaced(1, 12), vec![0]);
+        // round(k·3/2) for k = 0..2 is 0, 2 (1.5 rounds up), 3.
+        assert_eq!(evenly_spaced(4, 3), vec![0, 2, 3]);
+    }
 
     /// A tiny deterministic generator for the comparisons with plain vectors.
     struct Lcg(u64);

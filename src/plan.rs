@@ -7,9 +7,9 @@
 //! state is kept as a `FrameSet`.
 
 use crate::frameset::FrameSet;
-use crate::output::{self, Existing, Expected, fingerprint};
-use crate::schedule::{Files, frame_meta};
+use crate::output::{self, Existing, Expected, Files, RunIdentity};
 use crate::sequence::Sequence;
+use crate::shutter::FrameView;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -51,7 +51,7 @@ pub fn plan(seq: &Sequence, frames: &FrameSet, files: &Files, force: bool) -> Pl
         // Unlisted (unreadable directory): look at every selected frame's file.
         None => (frames.iter().collect(), FrameSet::new()),
     };
-    let run = fingerprint::of_run(&seq.scene, &seq.settings, &files.format);
+    let identity = RunIdentity::new(seq, &files.format);
     let expected = Expected {
         width: seq.settings.width,
         height: seq.settings.height,
@@ -63,8 +63,11 @@ pub fn plan(seq: &Sequence, frames: &FrameSet, files: &Files, force: bool) -> Pl
         let states: Vec<State> = chunk
             .par_iter()
             .map(|&n| {
-                let ours = |f: &str| f == frame_meta(seq, n, &run).fingerprint;
-                match output::inspect(&files.pattern.frame_path(n), &expected) {
+                let ours = |f: &str| {
+                    let view = FrameView::of_frame(&seq.timeline, seq.settings.shutter, n);
+                    f == identity.fingerprint(&view)
+                };
+                match output::inspect(&files.frame_path(n), &expected) {
                     Existing::Missing => State::Missing,
                     Existing::Foreign => State::Foreign,
                     Existing::Corrupt(why) => State::Corrupt(why),
@@ -92,7 +95,7 @@ pub fn plan(seq: &Sequence, frames: &FrameSet, files: &Files, force: bool) -> Pl
 /// The selected frames whose names the directory holds, ascending; `None` when it cannot be
 /// listed for another reason than not existing.
 fn listed(files: &Files, frames: &FrameSet) -> Option<Vec<u64>> {
-    let dir = directory(&files.pattern.frame_path(0));
+    let dir = directory(&files.frame_path(0));
     let entries = match std::fs::read_dir(&dir) {
         Ok(entries) => entries,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Some(Vec::new()),
@@ -172,6 +175,11 @@ impl Plan {
             ("corrupt", &self.corrupt),
             ("foreign", &self.foreign),
         ]
+    }
+
+    /// How many frames each state has, in the order of `by_state`.
+    pub fn counts(&self) -> [(&'static str, u64); 5] {
+        self.by_state().map(|(what, set)| (what, set.len()))
     }
 
     /// How many frames are selected.

@@ -3,8 +3,7 @@
 //! `--progress json`, nothing with `--quiet`. stdout is never touched.
 
 use crate::claim::Held;
-use crate::console::printable;
-use crate::plan::Plan;
+use crate::console::{printable, quote};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::cell::Cell;
 use std::io::IsTerminal;
@@ -67,18 +66,18 @@ impl Progress {
         }
     }
 
-    /// The plan before the first frame: `48 frames: 30 up to date, 18 missing → rendering 18`,
-    /// or in JSON a `start` event with the count of every state (streams without files have
-    /// no plan: every selected frame is rendered).
-    pub fn start(&self, plan: Option<&Plan>, selected: u64) {
+    /// The plan before the first frame: its summary (`48 frames: 30 up to date, 18 missing →
+    /// rendering 18`), or in JSON a `start` event with the count of frames in every state
+    /// (streams without files have no plan: every selected frame is rendered).
+    pub fn start(&self, plan: Option<(&str, &[(&str, u64)])>, selected: u64) {
         let Mode::Json = self.mode else {
-            return plan.into_iter().for_each(|p| self.note(&p.summary()));
+            return plan.into_iter().for_each(|(summary, _)| self.note(summary));
         };
-        let counts = plan.map_or(String::new(), |p| {
-            let states = p
-                .by_state()
-                .map(|(what, set)| format!(", \"{}\": {}", what.replace(' ', "_"), set.len()));
-            states.concat()
+        let counts = plan.map_or(String::new(), |(_, states)| {
+            let states = states
+                .iter()
+                .map(|(what, n)| format!(", \"{}\": {n}", what.replace(' ', "_")));
+            states.collect()
         });
         eprintln!(
             "{{\"event\": \"start\", \"selected\": {selected}, \"rendering\": {}{counts}, \"sequence_frames\": {}}}",
@@ -300,21 +299,4 @@ pub fn rate(per_second: f64) -> String {
         r if r > 0.0 => format!("{:.1} s/frame", 1.0 / r),
         _ => "0 frames/s".into(),
     }
-}
-
-/// A JSON string literal.
-pub fn quote(s: &str) -> String {
-    let mut out = String::with_capacity(s.len() + 2);
-    out.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            '\n' => out.push_str("\\n"),
-            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
 }

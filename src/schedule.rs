@@ -6,28 +6,18 @@
 
 use crate::claim::{Attempt, Claims};
 use crate::frame::Frame;
-use crate::output::{
-    self, FileFormat, FrameMeta, fingerprint, pattern::Pattern, stream::StreamFormat,
-};
+use crate::output::{self, EncodeError, Files, RunIdentity, stream::StreamFormat};
 use crate::progress::Progress;
 use crate::sequence::Sequence;
-use crate::shutter::Exposure;
-use crate::tracer::{self, Settings, World};
+use crate::settings::Settings;
+use crate::shutter::{Exposure, FrameView};
+use crate::signals::{interrupt_code, interrupted, signal_name};
+use crate::tracer::{self, World};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
-
-use crate::signals::signal_name;
-pub use crate::signals::{install_interrupt_handler, interrupt_code, interrupted};
 use std::sync::{Arc, mpsc};
 use std::time::{Duration, Instant};
-
-/// Where frame files go and in which format.
-#[derive(Clone)]
-pub struct Files {
-    pub pattern: Pattern,
-    pub format: FileFormat,
-}
 
 /// One frame of a run: its number, and whether its file must be written (with a stream, frames
 /// whose files are up to date are still rendered for the stream but not rewritten).
@@ -37,7 +27,9 @@ pub struct Task {
     pub write_file: bool,
 }
 
-pub struct Job {
+/// What a run renders and where it goes: the frames (tasks), the file sink, the stream, the
+/// threads and, when processes cooperate, their claims.
+pub struct Batch {
     pub sequence: Arc<Sequence>,
     /// Ascending frame numbers, each inside the timeline.
     pub tasks: Vec<Task>,
@@ -66,7 +58,8 @@ pub enum Outcome {
 /// behind rendering, few enough that memory stays a handful of frames.
 const EXTRA_IN_FLIGHT: usize = 2;
 
-struct Done {
+/// A frame a worker finished: how long it took and its encoded bytes for each sink.
+struct Encoded {
     seconds: f64,
     file: Option<Vec<u8>>,
     stream: Option<Vec<u8>>,
@@ -74,7 +67,7 @@ struct Done {
 
 /// The I/O side of a run: everything this thread does with finished frames.
 struct Delivery<'a> {
-    job: &'a Job,
+    batch: &'a Batch,
     progress: &'a mut Progress,
     stream: Option<Reorder>,
     written: usize,
@@ -88,15 +81,8 @@ struct Delivery<'a> {
     signalled: Option<Instant>,
 }
 
-/// The tools around the pipeline (`measure`, `bench`) report failures as text.
-impl From<RunError> for String {
-    fn from(e: RunError) -> String {
-        e.to_string()
-    }
-}
-
 /// What a worker sends back: the frame's bytes, `None` if it was cancelled, or why it failed.
-type Produced = Result<Option<Done>, RunError>;
+type Produced = Result<Option<Encoded>, RunError>;
 
 /// Why a run stopped short of its frames (the command maps every one to exit 1).
 #[derive(Debug, thiserror::Error)]
@@ -111,13 +97,13 @@ pub enum RunError {
         frame: u64,
         source: crate::shutter::NoCamera,
     },
-    #[error("{}: cannot encode: {message}", path.display())]
+    #[error("{}: cannot encode: {source}", path.display())]
     Encode {
         path: std::path::PathBuf,
-        message: String,
+        source: EncodeError,
     },
-    #[error("frame {frame}: cannot encode the stream: {message}")]
-    EncodeStream { frame: u64, message: String },
+    #[error("frame {frame}: cannot encode the stream: {source}")]
+    EncodeStream { frame: u64, source: EncodeError },
     #[error("{}: cannot write: {source}", path.display())]
     Write {
         path: std::path::PathBuf,
@@ -141,8 +127,8 @@ const TICK: Duration = Duration::from_millis(100);
 /// so this only matters while one is being encoded) before it leaves them behind.
 const STOP_GRACE: Duration = Duration::from_secs(2);
 
-pub fn run(job: Job, progress: &mut Progress) -> Result<Outcome, RunError> {
-    run_on(&worker_pool(job.threads)?, job, progress)
+pub fn run(batch: Batch, progress: &mut Progress) -> Result<Outcome, RunError> {
+    run_on(&worker_pool(batch.threads)?, batch, progress)
 }
 
 /// The worker threads of a run; an error when the machine cannot start that many.
@@ -157,27 +143,27 @@ pub fn worker_pool(threads: usize) -> Result<rayon::ThreadPool, RunError> {
 /// `run` on threads already started (claim mode runs several passes on them).
 pub fn run_on(
     pool: &rayon::ThreadPool,
-    mut job: Job,
+    mut batch: Batch,
     progress: &mut Progress,
 ) -> Result<Outcome, RunError> {
     return_frame_buffers_to_the_os();
-    let window = match job.stream {
+    let window = match batch.stream {
         // A stream has its order to keep: one frame rendering (on every thread) while the one
         // before is written keeps memory to two frames whatever the reader does.
         Some(_) => 2,
-        None => job.threads + EXTRA_IN_FLIGHT,
+        None => batch.threads + EXTRA_IN_FLIGHT,
     };
     let (tx, rx) = mpsc::channel::<(u64, Produced)>();
-    let out = job
+    let out = batch
         .stream_out
         .take()
         .unwrap_or_else(|| Box::new(std::io::stdout()));
     let mut d = Delivery {
-        job: &job,
+        batch: &batch,
         progress,
-        stream: job
+        stream: batch
             .stream
-            .map(|_| Reorder::new(&job.tasks, StreamWriter::start(out))),
+            .map(|_| Reorder::new(&batch.tasks, StreamWriter::start(out))),
         written: 0,
         held: Vec::new(),
         claimed: Vec::new(),
@@ -185,8 +171,8 @@ pub fn run_on(
         cancel: Arc::new(AtomicBool::new(false)),
         signalled: None,
     };
-    let spawn = spawner(pool, &job, &d.cancel, tx);
-    let mut pending = job.tasks.iter().copied();
+    let spawn = spawner(pool, &batch, &d.cancel, tx);
+    let mut pending = batch.tasks.iter().copied();
     let mut in_flight = 0;
     loop {
         d.notice_signal(in_flight);
@@ -218,17 +204,15 @@ pub fn run_on(
 /// Starts one frame on the pool; its result comes back through `tx`.
 fn spawner<'a>(
     pool: &'a rayon::ThreadPool,
-    job: &Job,
+    batch: &Batch,
     cancel: &Arc<AtomicBool>,
     tx: mpsc::Sender<(u64, Produced)>,
 ) -> impl Fn(Task) + 'a {
-    let seq = Arc::clone(&job.sequence);
+    let seq = Arc::clone(&batch.sequence);
     let world = Arc::new(World::new(seq.scene.clone()));
-    let files = job.files.clone();
-    let run_hash = files
-        .as_ref()
-        .map(|f| fingerprint::of_run(&seq.scene, &seq.settings, &f.format));
-    let (stream, cancel) = (job.stream, Arc::clone(cancel));
+    let files = batch.files.clone();
+    let identity = files.as_ref().map(|f| RunIdentity::new(&seq, &f.format));
+    let (stream, cancel) = (batch.stream, Arc::clone(cancel));
     move |task| {
         let (tx, seq, world, cancel) = (
             tx.clone(),
@@ -238,7 +222,7 @@ fn spawner<'a>(
         );
         let files = files.clone();
         pool.spawn(move || {
-            let files = files.as_ref().zip(run_hash.as_ref());
+            let files = files.as_ref().zip(identity.as_ref());
             let _ = tx.send((
                 task.frame,
                 produce(&world, &seq, task, files, stream, &cancel),
@@ -298,10 +282,10 @@ impl Delivery<'_> {
 
     /// Claims frame `n` when cooperating; false if another process holds it.
     fn claim(&mut self, n: u64) -> bool {
-        let (Some(claims), Some(files)) = (&self.job.claims, &self.job.files) else {
+        let (Some(claims), Some(files)) = (&self.batch.claims, &self.batch.files) else {
             return true;
         };
-        match claims.try_claim(&files.pattern.frame_path(n)) {
+        match claims.try_claim(&files.frame_path(n)) {
             Ok(Attempt::Claimed) => {
                 self.claimed.push((n, Instant::now()));
                 true
@@ -311,7 +295,7 @@ impl Delivery<'_> {
                 false
             }
             Err(e) => {
-                let path = Claims::path(&files.pattern.frame_path(n));
+                let path = Claims::path(&files.frame_path(n));
                 self.stop
                     .get_or_insert(Err(RunError::Claim { path, source: e }));
                 false
@@ -320,20 +304,20 @@ impl Delivery<'_> {
     }
 
     fn heartbeat(&mut self) {
-        let (Some(claims), Some(files)) = (&self.job.claims, &self.job.files) else {
+        let (Some(claims), Some(files)) = (&self.batch.claims, &self.batch.files) else {
             return;
         };
         for (n, last) in &mut self.claimed {
             if last.elapsed() >= claims.heartbeat_every() {
-                claims.heartbeat(&files.pattern.frame_path(*n));
+                claims.heartbeat(&files.frame_path(*n));
                 *last = Instant::now();
             }
         }
     }
 
     fn release(&mut self, n: u64) {
-        if let (Some(claims), Some(files)) = (&self.job.claims, &self.job.files) {
-            claims.release(&files.pattern.frame_path(n));
+        if let (Some(claims), Some(files)) = (&self.batch.claims, &self.batch.files) {
+            claims.release(&files.frame_path(n));
             self.claimed.retain(|(f, _)| *f != n);
         }
     }
@@ -351,8 +335,8 @@ impl Delivery<'_> {
                 return;
             }
         };
-        if let (Some(bytes), Some(files)) = (&done.file, &self.job.files) {
-            let path = files.pattern.frame_path(frame);
+        if let (Some(bytes), Some(files)) = (&done.file, &self.batch.files) {
+            let path = files.frame_path(frame);
             let result = output::atomic::write_atomic(&path, bytes);
             self.release(frame);
             if let Err(source) = result {
@@ -415,24 +399,25 @@ fn produce(
     world: &World,
     seq: &Sequence,
     task: Task,
-    files: Option<(&Files, &fingerprint::Hasher)>,
+    files: Option<(&Files, &RunIdentity)>,
     stream: Option<(StreamFormat, bool)>,
     cancel: &AtomicBool,
 ) -> Produced {
     let start = Instant::now();
     let n = task.frame;
-    let exposure = Exposure::of_frame(&seq.timeline, seq.settings.shutter, n)
-        .map_err(|source| RunError::Camera { frame: n, source })?;
-    let Some(frame) = tracer::render_or_stop(world, &exposure, &seq.settings, n, cancel) else {
+    let view = FrameView::of_frame(&seq.timeline, seq.settings.shutter, n);
+    let exposure =
+        (view.exposure.as_ref()).map_err(|&source| RunError::Camera { frame: n, source })?;
+    let Some(frame) = tracer::render_or_stop(world, exposure, &seq.settings, n, cancel) else {
         return Ok(None);
     };
     let file = match files.filter(|_| task.write_file) {
-        Some((files, run_hash)) => {
-            let meta = frame_meta(seq, n, run_hash);
-            let path = files.pattern.frame_path(n);
+        Some((files, identity)) => {
+            let meta = identity.meta(&view);
+            let path = files.frame_path(n);
             Some(
                 output::encode_file(&frame, &files.format, &meta)
-                    .map_err(|message| RunError::Encode { path, message })?,
+                    .map_err(|source| RunError::Encode { path, source })?,
             )
         }
         None => None,
@@ -440,28 +425,16 @@ fn produce(
     let stream = match stream {
         Some((format, sixteen)) => Some(
             output::stream::encode(&frame, format, sixteen)
-                .map_err(|message| RunError::EncodeStream { frame: n, message })?,
+                .map_err(|source| RunError::EncodeStream { frame: n, source })?,
         ),
         None => None,
     };
     frame.recycle();
-    Ok(Some(Done {
+    Ok(Some(Encoded {
         seconds: start.elapsed().as_secs_f64(),
         file,
         stream,
     }))
-}
-
-pub fn frame_meta(seq: &Sequence, n: u64, run_hash: &fingerprint::Hasher) -> FrameMeta {
-    FrameMeta {
-        frame: n,
-        time: seq.timeline.time_of(n),
-        fps: seq.timeline.fps,
-        fingerprint: fingerprint::of_frame(run_hash, n, &seq.timeline, seq.settings.shutter),
-        matrices: crate::camera::Camera::new(&seq.timeline.pose_of(n))
-            .ok()
-            .map(|c| c.exr_matrices(seq.settings.width, seq.settings.height)),
-    }
 }
 
 /// Puts stream bytes on stdout strictly in frame order, holding early arrivals.

@@ -11,7 +11,7 @@
 //! the camera there. The cameras are exact `camera_at` evaluations, built once a frame: a smooth
 //! keyframed camera costs about 2 µs to evaluate, far too much for every sample.
 
-use crate::camera::{Camera, Degenerate};
+use crate::camera::{Camera, Degenerate, Pose};
 use crate::timeline::Timeline;
 use glam::DVec3;
 
@@ -47,6 +47,35 @@ pub struct Exposure {
     /// With a shutter and a camera that moves while it is open, the camera at each instant;
     /// otherwise empty.
     pub instants: Vec<Camera>,
+}
+
+/// Frame `n` worked out once: its time, the camera's pose there (what the fingerprint records)
+/// and the cameras it is exposed with, or why there are none. Every stage that needs a frame's
+/// camera takes it from here.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameView {
+    pub frame: u64,
+    pub time: f64,
+    pub pose: Pose,
+    pub exposure: Result<Exposure, NoCamera>,
+}
+
+impl FrameView {
+    /// Frame `n` of `timeline` seen through `shutter`.
+    pub fn of_frame(timeline: &Timeline, shutter: Option<Shutter>, n: u64) -> FrameView {
+        let time = timeline.time_of(n);
+        let (pose, lens) = timeline.view_at(time);
+        let exposure = Camera::new(&pose)
+            .map(|c| c.with_lens(lens))
+            .map_err(|reason| NoCamera { time, reason })
+            .and_then(|camera| Exposure::around(camera, timeline, shutter, time));
+        FrameView {
+            frame: n,
+            time,
+            pose,
+            exposure,
+        }
+    }
 }
 
 /// A time at which the camera cannot be built.
@@ -85,14 +114,22 @@ impl Exposure {
         }
     }
 
-    /// Frame `n` of `timeline` seen through `shutter`.
+    /// Frame `n` of `timeline` seen through `shutter` (the exposure of its `FrameView`).
     pub fn of_frame(
         timeline: &Timeline,
         shutter: Option<Shutter>,
         n: u64,
     ) -> Result<Exposure, NoCamera> {
-        let t = timeline.time_of(n);
-        let camera = camera_at(timeline, t)?;
+        FrameView::of_frame(timeline, shutter, n).exposure
+    }
+
+    /// `camera`, the camera at time `t`, and with a shutter the cameras of its open interval.
+    fn around(
+        camera: Camera,
+        timeline: &Timeline,
+        shutter: Option<Shutter>,
+        t: f64,
+    ) -> Result<Exposure, NoCamera> {
         let Some(shutter) = shutter else {
             return Ok(Exposure::still(camera));
         };

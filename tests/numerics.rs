@@ -1228,7 +1228,9 @@ fn sizes_beyond_the_limit_are_rejected_before_allocating() {
     let base = "camera: { position: [0, 0, 1], look_at: [0, 0, 0] }\n";
     // `--size` is checked as the command line is parsed.
     for size in ["70000x70000", "100000x1", "1x100000", "16385x16384", "0x10"] {
-        let err = parse_size(size).expect_err("oversized --size accepted");
+        let err = parse_size(size)
+            .expect_err("oversized --size accepted")
+            .to_string();
         assert!(err.contains("pixels"), "{err}");
     }
     // 70000 × 70000 = 4.9e9 pixels: more than u32 holds.
@@ -1244,7 +1246,7 @@ fn sizes_beyond_the_limit_are_rejected_before_allocating() {
     // The largest accepted sizes load (nothing is allocated before rendering): 16384 on a
     // side, and width × height up to 2^26 pixels.
     assert_eq!(parse_size("16384x4096"), Ok((16_384, 4096)));
-    let err = parse_size("16384x16384").unwrap_err();
+    let err = parse_size("16384x16384").unwrap_err().to_string();
     assert!(err.contains("268435456 pixels"), "{err}");
 }
 

@@ -4,11 +4,19 @@
 //! frames, and the output pattern and format become the file sink.
 
 use super::{BitDepth, JobArgs, ShardSpec, resolve_shard};
-use crate::Error;
 use crate::frameset::FrameSet;
-use crate::output::FileFormat;
-use crate::schedule::Files;
-use crate::sequence::{self, Quality, Sequence, output_pattern, preset};
+use crate::output::{FileFormat, Files};
+use crate::sequence::{self, LoadError, Quality, Sequence, output_pattern, preset};
+
+/// Why the arguments make no job: the file is wrong, or the command line asks for something
+/// impossible (both exit 2).
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    #[error("{0}")]
+    Usage(String),
+}
 
 /// A sequence with the command line applied, and the frames this task renders.
 #[derive(Debug)]
@@ -22,18 +30,18 @@ pub struct Job {
 
 impl Job {
     /// Loads the file and applies the arguments.
-    pub fn new(args: &JobArgs) -> Result<Job, Error> {
+    pub fn new(args: &JobArgs) -> Result<Job, JobError> {
         Job::load(args, false)
     }
 
     /// `new` for `status`, the final check of a whole farm job: `--shard auto` outside a job
     /// array (no scheduler index set) means every shard, so the array script's own line can
     /// be repeated with `status` after the array ends.
-    pub fn for_status(args: &JobArgs) -> Result<Job, Error> {
+    pub fn for_status(args: &JobArgs) -> Result<Job, JobError> {
         Job::load(args, true)
     }
 
-    fn load(args: &JobArgs, every_shard: bool) -> Result<Job, Error> {
+    fn load(args: &JobArgs, every_shard: bool) -> Result<Job, JobError> {
         let mut seq = sequence::load(&args.file)?;
         apply(&mut seq, args)?;
         let frames = frames(&seq, args, every_shard)?;
@@ -47,13 +55,13 @@ impl Job {
 
     /// The file pattern and format. A pattern without a frame number holds one frame: the
     /// one selected.
-    pub fn files(&self, args: &JobArgs) -> Result<Files, Error> {
+    pub fn files(&self, args: &JobArgs) -> Result<Files, JobError> {
         let seq = &self.seq;
         let mut pattern =
-            output_pattern(&seq.output, seq.timeline.last_frame()).map_err(Error::Usage)?;
+            output_pattern(&seq.output, seq.timeline.last_frame()).map_err(JobError::Usage)?;
         if pattern.is_single() {
             if self.frames.len() != 1 {
-                return Err(Error::Usage(format!(
+                return Err(JobError::Usage(format!(
                     "output `{}` has no `#` run or %04d for the frame number, so it holds one frame, but {} frames are selected (select one with --frames, or use a pattern such as frame_####.png)",
                     seq.output,
                     self.frames.len()
@@ -67,15 +75,15 @@ impl Job {
             args.png_compression,
             args.exr_precision,
         )
-        .map_err(|e| Error::Usage(format!("output `{}`: {e}", seq.output)))?;
+        .map_err(|e| JobError::Usage(format!("output `{}`: {e}", seq.output)))?;
         let exr = matches!(format, FileFormat::Exr { .. });
         if exr && self.sixteen_bit {
-            return Err(Error::Usage(
+            return Err(JobError::Usage(
                 "--bit-depth 16 applies to PNG files and streams; EXR frames are float".into(),
             ));
         }
         if seq.settings.depth && !exr {
-            return Err(Error::Usage(format!(
+            return Err(JobError::Usage(format!(
                 "--depth (render.depth) needs EXR frames to hold the Z channel; `{}` is not .exr",
                 seq.output
             )));
@@ -85,7 +93,7 @@ impl Job {
 }
 
 /// The command line's values replace the file's: a preset first, then the values it sets.
-fn apply(seq: &mut Sequence, o: &JobArgs) -> Result<(), Error> {
+fn apply(seq: &mut Sequence, o: &JobArgs) -> Result<(), JobError> {
     if let Some(q) = o.quality {
         preset(&mut seq.settings, q);
     }
@@ -121,21 +129,21 @@ fn apply(seq: &mut Sequence, o: &JobArgs) -> Result<(), Error> {
     }
     if let Some(e) = o.exposure {
         seq.settings.exposure =
-            sequence::exposure(e).map_err(|m| Error::Usage(format!("--exposure: {m}")))?;
+            sequence::exposure(e).map_err(|m| JobError::Usage(format!("--exposure: {m}")))?;
     }
     output_pattern(&seq.output, seq.timeline.last_frame())
-        .map_err(|m| Error::Usage(format!("--output: {m}")))?;
+        .map_err(|m| JobError::Usage(format!("--output: {m}")))?;
     Ok(())
 }
 
 /// This task's frames: the spec's (default all), then the shard's share (`every_shard`: all
 /// of them when `--shard auto` finds no scheduler index).
-fn frames(seq: &Sequence, args: &JobArgs, every_shard: bool) -> Result<FrameSet, Error> {
+fn frames(seq: &Sequence, args: &JobArgs, every_shard: bool) -> Result<FrameSet, JobError> {
     let (first, last) = (seq.timeline.first_frame(), seq.timeline.last_frame());
     let mut frames = match &args.frames {
         Some(spec) => spec
             .frames(first, last)
-            .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
+            .map_err(|e| JobError::Usage(format!("--frames: {e}")))?,
         None => FrameSet::range(first, last, 1),
     };
     let env = |name: &str| std::env::var(name).ok();
@@ -148,7 +156,7 @@ fn frames(seq: &Sequence, args: &JobArgs, every_shard: bool) -> Result<FrameSet,
     };
     if let Some(spec) = shard {
         let (k, n) = resolve_shard(spec, args.shard_count, &env)
-            .map_err(|e| Error::Usage(format!("--shard: {e}")))?;
+            .map_err(|e| JobError::Usage(format!("--shard: {e}")))?;
         frames = frames.shard(k, n);
     }
     Ok(frames)

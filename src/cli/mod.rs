@@ -6,11 +6,12 @@
 pub mod job;
 pub mod spec;
 
-pub use spec::{FrameSpec, ShardSpec, parse_frame_spec, parse_shard, parse_size, resolve_shard};
+pub use spec::{
+    FrameSpec, ShardSpec, SpecError, parse_frame_spec, parse_shard, parse_size, resolve_shard,
+};
 
-use crate::output::exr::Precision;
-use crate::output::png::Compression;
 use crate::output::stream::StreamFormat;
+use crate::output::{Compression, ExrPrecision};
 use crate::sequence::{MAX_DEPTH, MAX_FIRST_FRAME, MAX_SAMPLES, Quality};
 use crate::transfer::Encoding;
 use clap::{Args, Parser, Subcommand};
@@ -188,8 +189,8 @@ pub struct JobArgs {
     #[arg(long, value_name = "BITS", value_enum, default_value_t = BitDepth::Eight)]
     pub bit_depth: BitDepth,
     /// Float precision of the R, G, B channels of EXR files.
-    #[arg(long, value_name = "PRECISION", value_enum, default_value_t = Precision::Half)]
-    pub exr_precision: Precision,
+    #[arg(long, value_name = "PRECISION", value_enum, default_value_t = ExrPrecision::Half)]
+    pub exr_precision: ExrPrecision,
     /// PNG compression level.
     #[arg(long, value_name = "LEVEL", value_enum, default_value_t = Compression::Fast)]
     pub png_compression: Compression,
@@ -208,7 +209,7 @@ pub struct JobArgs {
     /// Arithmetic of the tracer: f64, or f32 at about twice the speed (replaces
     /// render.precision).
     #[arg(long, value_enum)]
-    pub precision: Option<crate::tracer::Precision>,
+    pub precision: Option<crate::settings::Precision>,
 }
 
 /// `render`'s options; `status` takes them too and ignores those that only shape a run.

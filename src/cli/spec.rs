@@ -5,6 +5,61 @@
 use crate::frameset::{FrameSet, Run};
 use crate::sequence::{MAX_DIMENSION, MAX_PIXELS};
 
+/// Most comma-separated entries a frame spec may have: farm managers hand out one range or a
+/// few, and a bound keeps expansion time bounded too.
+const MAX_ENTRIES: usize = 64;
+
+/// What is wrong with a frame spec, a shard or a size (clap shows it after the flag).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SpecError {
+    #[error("expected K/N with 1 ≤ K ≤ N, such as 2/4, or `auto` (got `{0}`)")]
+    Shard(String),
+    #[error("{name}={value} is not a whole number")]
+    NotANumber { name: &'static str, value: String },
+    #[error("SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not")]
+    NoSlurmCount,
+    #[error(
+        "SLURM_ARRAY_TASK_ID={id} is outside MIN={min}, COUNT={count} (use a contiguous array such as --array=0-3)"
+    )]
+    OutsideSlurmArray { id: u64, min: u64, count: u64 },
+    #[error("JOB_COMPLETION_INDEX is set: give --shard-count N (the job's completions)")]
+    NoShardCount,
+    #[error("JOB_COMPLETION_INDEX={index} is not below --shard-count {count}")]
+    OutsideShardCount { index: u64, count: u64 },
+    #[error(
+        "--shard auto needs SLURM_ARRAY_TASK_ID (a Slurm job array) or JOB_COMPLETION_INDEX with --shard-count (a Kubernetes Indexed Job); neither is set"
+    )]
+    NoScheduler,
+    #[error("frame {frame} is outside the timeline, which has frames {first}-{last}")]
+    OutsideTimeline { frame: u64, first: u64, last: u64 },
+    #[error("the range {0}-{1} runs backwards")]
+    Backwards(u64, u64),
+    #[error("frame spec has more than {MAX_ENTRIES} comma-separated entries")]
+    TooManyEntries,
+    #[error(
+        "`{part}` in frame spec `{spec}`: {why}; use forms like 7, 0-23, 1..10, 5-, last, 0-100:5, 1-100x2, 1,3,10-12"
+    )]
+    Entry {
+        part: String,
+        spec: String,
+        why: &'static str,
+    },
+    #[error("expected WIDTHxHEIGHT such as 640x360 (got `{0}`)")]
+    Size(String),
+    #[error("expected WIDTHxHEIGHT with whole numbers such as 640x360 (got `{0}`)")]
+    SizeNotWhole(String),
+    #[error("{what} must be 1 to {MAX_DIMENSION} pixels (got {got})")]
+    Dimension { what: &'static str, got: u64 },
+    #[error(
+        "{width}x{height} is {pixels} pixels; a frame may have at most {MAX_PIXELS} (e.g. 8192x8192)"
+    )]
+    Pixels {
+        width: u32,
+        height: u32,
+        pixels: u64,
+    },
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ShardSpec {
     /// 1-based task number and task count.
@@ -12,11 +67,11 @@ pub enum ShardSpec {
     Auto,
 }
 
-pub fn parse_shard(s: &str) -> Result<ShardSpec, String> {
+pub fn parse_shard(s: &str) -> Result<ShardSpec, SpecError> {
     if s == "auto" {
         return Ok(ShardSpec::Auto);
     }
-    let bad = || format!("expected K/N with 1 ≤ K ≤ N, such as 2/4, or `auto` (got `{s}`)");
+    let bad = || SpecError::Shard(s.to_string());
     let (k, n) = s.split_once('/').ok_or_else(bad)?;
     let (k, n): (u64, u64) = (
         k.trim().parse().map_err(|_| bad())?,
@@ -33,41 +88,36 @@ pub fn resolve_shard(
     spec: ShardSpec,
     shard_count: Option<u64>,
     env: &dyn Fn(&str) -> Option<String>,
-) -> Result<(u64, u64), String> {
+) -> Result<(u64, u64), SpecError> {
     if let ShardSpec::Fixed(k, n) = spec {
         return Ok((k, n));
     }
-    let num = |name: &str| -> Result<Option<u64>, String> {
+    let num = |name: &'static str| -> Result<Option<u64>, SpecError> {
         env(name)
-            .map(|v| {
-                v.trim()
+            .map(|value| {
+                value
+                    .trim()
                     .parse::<u64>()
-                    .map_err(|_| format!("{name}={v} is not a whole number"))
+                    .map_err(|_| SpecError::NotANumber { name, value })
             })
             .transpose()
     };
     if let Some(id) = num("SLURM_ARRAY_TASK_ID")? {
         let min = num("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
-        let count = num("SLURM_ARRAY_TASK_COUNT")?
-            .ok_or("SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not")?;
+        let count = num("SLURM_ARRAY_TASK_COUNT")?.ok_or(SpecError::NoSlurmCount)?;
         if id < min || id - min >= count {
-            return Err(format!(
-                "SLURM_ARRAY_TASK_ID={id} is outside MIN={min}, COUNT={count} (use a contiguous array such as --array=0-3)"
-            ));
+            return Err(SpecError::OutsideSlurmArray { id, min, count });
         }
         return Ok((id - min + 1, count));
     }
     if let Some(index) = num("JOB_COMPLETION_INDEX")? {
-        let count = shard_count
-            .ok_or("JOB_COMPLETION_INDEX is set: give --shard-count N (the job's completions)")?;
+        let count = shard_count.ok_or(SpecError::NoShardCount)?;
         if index >= count {
-            return Err(format!(
-                "JOB_COMPLETION_INDEX={index} is not below --shard-count {count}"
-            ));
+            return Err(SpecError::OutsideShardCount { index, count });
         }
         return Ok((index + 1, count));
     }
-    Err("--shard auto needs SLURM_ARRAY_TASK_ID (a Slurm job array) or JOB_COMPLETION_INDEX with --shard-count (a Kubernetes Indexed Job); neither is set".into())
+    Err(SpecError::NoScheduler)
 }
 
 /// One end of a range in a frame spec: a number, or the timeline's first or last frame.
@@ -98,17 +148,15 @@ impl FrameSpec {
     /// The selected frames of a timeline numbered `first`…`last`, or the first one out of
     /// range. Repeated and overlapping ranges are joined as ranges, so `0-9999999` costs one
     /// run, however often it is repeated.
-    pub fn frames(&self, first: u64, last: u64) -> Result<FrameSet, String> {
+    pub fn frames(&self, first: u64, last: u64) -> Result<FrameSet, SpecError> {
         let mut runs = Vec::with_capacity(self.ranges.len());
         for &(a, b, step) in &self.ranges {
             let (a, b) = (a.resolve(first, last), b.resolve(first, last));
-            if let Some(out) = [a, b].into_iter().find(|n| !(first..=last).contains(n)) {
-                return Err(format!(
-                    "frame {out} is outside the timeline, which has frames {first}-{last}"
-                ));
+            if let Some(frame) = [a, b].into_iter().find(|n| !(first..=last).contains(n)) {
+                return Err(SpecError::OutsideTimeline { frame, first, last });
             }
             if a > b {
-                return Err(format!("the range {a}-{b} runs backwards"));
+                return Err(SpecError::Backwards(a, b));
             }
             runs.push(Run::new(a, b, step));
         }
@@ -118,13 +166,9 @@ impl FrameSpec {
 
 /// Parses a frame spec: comma-separated entries `N`, `A-B`, `A..B`, `A-` (to the last frame),
 /// `first`, `last`, each range with an optional step `:S` or `xS`.
-pub fn parse_frame_spec(s: &str) -> Result<FrameSpec, String> {
-    // Farm managers hand out one range or a few; a bound keeps expansion time bounded too.
-    const MAX_ENTRIES: usize = 64;
+pub fn parse_frame_spec(s: &str) -> Result<FrameSpec, SpecError> {
     if s.split(',').count() > MAX_ENTRIES {
-        return Err(format!(
-            "frame spec has more than {MAX_ENTRIES} comma-separated entries"
-        ));
+        return Err(SpecError::TooManyEntries);
     }
     let ranges = s.split(',').map(|part| entry(s, part.trim()));
     Ok(FrameSpec {
@@ -133,11 +177,11 @@ pub fn parse_frame_spec(s: &str) -> Result<FrameSpec, String> {
 }
 
 /// One entry of a frame spec.
-fn entry(spec: &str, part: &str) -> Result<(End, End, u64), String> {
-    let bad = |why: &str| {
-        format!(
-            "`{part}` in frame spec `{spec}`: {why}; use forms like 7, 0-23, 1..10, 5-, last, 0-100:5, 1-100x2, 1,3,10-12"
-        )
+fn entry(spec: &str, part: &str) -> Result<(End, End, u64), SpecError> {
+    let bad = |why| SpecError::Entry {
+        part: part.to_string(),
+        spec: spec.to_string(),
+        why,
     };
     if part.is_empty() {
         return Err(bad("empty entry"));
@@ -183,29 +227,27 @@ fn entry(spec: &str, part: &str) -> Result<(End, End, u64), String> {
 }
 
 /// `WxH` with both parts whole numbers of pixels within the limits a frame may have.
-pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+pub fn parse_size(s: &str) -> Result<(u32, u32), SpecError> {
     let (w, h) = s
         .split_once(['x', 'X'])
-        .ok_or_else(|| format!("expected WIDTHxHEIGHT such as 640x360 (got `{s}`)"))?;
-    let num = |p: &str, what: &str| {
-        let v = p.trim().parse::<u64>().map_err(|_| {
-            format!("expected WIDTHxHEIGHT with whole numbers such as 640x360 (got `{s}`)")
-        })?;
-        match (1..=MAX_DIMENSION).contains(&v) {
-            true => Ok(v as u32),
-            false => Err(format!(
-                "{what} must be 1 to {MAX_DIMENSION} pixels (got {v})"
-            )),
+        .ok_or_else(|| SpecError::Size(s.to_string()))?;
+    let num = |p: &str, what| {
+        let got = (p.trim().parse::<u64>()).map_err(|_| SpecError::SizeNotWhole(s.to_string()))?;
+        match (1..=MAX_DIMENSION).contains(&got) {
+            true => Ok(got as u32),
+            false => Err(SpecError::Dimension { what, got }),
         }
     };
-    let (w, h) = (num(w, "width")?, num(h, "height")?);
-    let n = u64::from(w) * u64::from(h);
-    if n > MAX_PIXELS {
-        return Err(format!(
-            "{w}x{h} is {n} pixels; a frame may have at most {MAX_PIXELS} (e.g. 8192x8192)"
-        ));
+    let (width, height) = (num(w, "width")?, num(h, "height")?);
+    let pixels = u64::from(width) * u64::from(height);
+    if pixels > MAX_PIXELS {
+        return Err(SpecError::Pixels {
+            width,
+            height,
+            pixels,
+        });
     }
-    Ok((w, h))
+    Ok((width, height))
 }
 
 #[cfg(test)]
@@ -213,7 +255,9 @@ mod tests {
     use super::*;
 
     fn frames(s: &str, count: u64) -> Result<Vec<u64>, String> {
-        Ok(parse_frame_spec(s)?.frames(0, count - 1)?.iter().collect())
+        let spec = parse_frame_spec(s).map_err(|e| e.to_string())?;
+        let set = spec.frames(0, count - 1).map_err(|e| e.to_string())?;
+        Ok(set.iter().collect())
     }
 
     #[test]
@@ -274,11 +318,13 @@ mod tests {
         assert!(
             resolve_shard(ShardSpec::Auto, None, &k8s)
                 .unwrap_err()
+                .to_string()
                 .contains("--shard-count")
         );
         assert!(
             resolve_shard(ShardSpec::Auto, None, &|_| None)
                 .unwrap_err()
+                .to_string()
                 .contains("neither is set")
         );
     }
@@ -299,7 +345,8 @@ mod tests {
         let below = parse_frame_spec("0")
             .unwrap()
             .frames(1001, 1003)
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(below.contains("frames 1001-1003"), "{below}");
     }
 
@@ -308,6 +355,7 @@ mod tests {
         assert_eq!(parse_size("640x360"), Ok((640, 360)));
         assert!(parse_size("640").is_err());
         assert!(parse_size("-1x3").is_err());
-        assert!(parse_size("70000x70000").unwrap_err().contains("16384"));
+        let err = parse_size("70000x70000").unwrap_err().to_string();
+        assert!(err.contains("16384"), "{err}");
     }
 }

@@ -3,8 +3,7 @@
 //! shortest form that reads back as the same f64, so a still camera given a printed pose
 //! renders that frame exactly.
 
-use super::print_warnings;
-use crate::Error;
+use super::{Error, print_warnings};
 use crate::cli::{CameraArgs, CameraFormat};
 use crate::sequence::{self, Sequence};
 use glam::DVec3;

@@ -4,15 +4,18 @@ mod camera;
 mod meshes;
 mod render;
 
-use crate::Error;
+use crate::cli::job::JobError;
 use crate::cli::{BenchArgs, CheckArgs, Cli, Command, MeasureArgs, PreviewArgs};
 use crate::console::{self, printable};
 use crate::output;
 use crate::scene::{Light, Shape};
-use crate::sequence::{self, Sequence};
+use crate::schedule::RunError;
+use crate::sequence::{self, LoadError, Sequence};
 use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
+use crate::warnings;
 use std::path::Path;
 
+/// The whole program behind the command line: `main` maps the error to its exit code.
 pub fn run(cli: Cli) -> Result<(), Error> {
     match cli.command {
         Command::Render(args) => render::render(args),
@@ -25,17 +28,50 @@ pub fn run(cli: Cli) -> Result<(), Error> {
     }
 }
 
-/// What a valid sequence still deserves a warning for: keys the film never shows, frames with
-/// the camera inside an object, f32 frames traced in f64.
-fn warnings(seq: &Sequence) -> Vec<String> {
-    let mut all = seq.warnings.clone();
-    all.extend(crate::tools::preview::inside_warnings(seq));
-    all.extend(crate::tools::preview::precision_warnings(seq));
-    all
+/// Everything that ends a run early, with the exit code it maps to.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The sequence file or a flag is wrong: nothing was rendered (exit 2).
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    /// The command line asks for something impossible (exit 2).
+    #[error("{0}")]
+    Usage(String),
+    /// Rendering or writing failed (exit 1).
+    #[error("{0}")]
+    Failed(String),
+    /// A run stopped short: a frame could not be rendered, encoded or written (exit 1).
+    #[error(transparent)]
+    Run(#[from] RunError),
+    /// `status` found frames that are not up to date (exit 1).
+    #[error("{0}")]
+    Incomplete(String),
+    /// Ctrl-C or SIGTERM: the exit code is 128 + the signal (130 for SIGINT, 143 for SIGTERM).
+    #[error("{0}")]
+    Interrupted(String, u8),
+}
+
+impl Error {
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Error::Load(_) | Error::Usage(_) => 2,
+            Error::Failed(_) | Error::Run(_) | Error::Incomplete(_) => 1,
+            Error::Interrupted(_, code) => *code,
+        }
+    }
+}
+
+impl From<JobError> for Error {
+    fn from(e: JobError) -> Error {
+        match e {
+            JobError::Load(e) => Error::Load(e),
+            JobError::Usage(text) => Error::Usage(text),
+        }
+    }
 }
 
 fn print_warnings(seq: &Sequence) {
-    for w in warnings(seq) {
+    for w in warnings::for_sequence(seq) {
         eprintln!("warning: {w}");
     }
 }
@@ -61,7 +97,7 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
             }
             set.iter().collect()
         }
-        None => preview::evenly_spaced(seq.timeline.frame_count, args.tiles)
+        None => crate::frameset::evenly_spaced(seq.timeline.frame_count, args.tiles)
             .into_iter()
             .map(|n| n + first)
             .collect(),
@@ -75,12 +111,12 @@ fn preview(args: PreviewArgs) -> Result<(), Error> {
         eprintln!("warning: {}", printable(w));
     }
     let plot_file = dir.join(format!("{}_path.png", seq.name));
-    preview::write_png(&plot_file, &plot).map_err(Error::Failed)?;
+    preview::write_png(&plot_file, &plot).map_err(|e| Error::Failed(e.to_string()))?;
     out(&format!("{}\n", shown(&plot_file)))?;
-    let (sheet, _) =
-        preview::contact_sheet(&seq, &frames, preview::TILE_WIDTH).map_err(Error::Failed)?;
+    let (sheet, _) = preview::contact_sheet(&seq, &frames, preview::TILE_WIDTH)
+        .map_err(|e| Error::Failed(e.to_string()))?;
     let sheet_file = dir.join(format!("{}_sheet.png", seq.name));
-    preview::write_png(&sheet_file, &sheet).map_err(Error::Failed)?;
+    preview::write_png(&sheet_file, &sheet).map_err(|e| Error::Failed(e.to_string()))?;
     out(&format!("{}\n", shown(&sheet_file)))?;
     problem.map_or(Ok(()), |p| Err(Error::Load(p)))
 }
@@ -235,7 +271,7 @@ pub fn summary(file: &str, seq: &Sequence) -> String {
 }
 
 /// The `picture:` line: sampling, encoding, exposure and alpha, what decides how frames look.
-fn picture(s: &crate::tracer::Settings) -> String {
+fn picture(s: &crate::settings::Settings) -> String {
     let sampling = match s.adaptive {
         Some(a) => format!(
             "{} to {} samples (adaptive, threshold {})",
@@ -364,8 +400,7 @@ fn measure(args: MeasureArgs) -> Result<(), Error> {
     let report =
         crate::tools::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
             eprintln!("  {line}")
-        })
-        .map_err(Error::Failed)?;
+        })?;
     out(&report.table())?;
     for (name, text) in [
         ("measure.csv", report.csv()),
@@ -390,7 +425,7 @@ fn bench(args: BenchArgs) -> Result<(), Error> {
     crate::tools::bench::run(&options, &mut |line| {
         let _ = console::print(&format!("{line}\n"));
     })
-    .map_err(Error::Failed)
+    .map_err(|e| Error::Failed(e.to_string()))
 }
 
 /// A folder `name` in the frames' directory (`frames/orbit/preview`).

@@ -1,24 +1,24 @@
 //! `render` and `status`: the same job description (sequence, overrides, frames, shard,
 //! format) either rendered or only inspected.
 
-use super::{out, shown};
-use crate::Error;
+use super::{Error, out, shown};
 use crate::claim::{self, Claims, Held};
-use crate::cli::job::Job as JobSpec;
+use crate::cli::job::Job;
 use crate::cli::{ProgressFormat, RenderArgs};
 use crate::frameset::FrameSet;
-use crate::output::{self, stream::StreamFormat};
+use crate::output::{self, Files, stream::StreamFormat};
 use crate::plan::{self, Plan, State};
 use crate::progress::Progress;
-use crate::schedule::{self, Files, Job, Outcome, RunError, Task};
+use crate::schedule::{self, Batch, Outcome, RunError, Task};
 use crate::sequence::Sequence;
+use crate::signals;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Makes the frames' directory and removes this job's temporaries that processes which are
 /// gone left there.
 fn prepare(files: &Files, frames: &FrameSet) -> Result<(), Error> {
-    let dir = plan::directory(&files.pattern.frame_path(0));
+    let dir = plan::directory(&files.frame_path(0));
     std::fs::create_dir_all(&dir)
         .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
     output::atomic::clean_leftovers(&dir, &files.pattern, frames);
@@ -28,15 +28,15 @@ fn prepare(files: &Files, frames: &FrameSet) -> Result<(), Error> {
 pub fn render(args: RenderArgs) -> Result<(), Error> {
     // From here on every line on stderr is one JSON object, errors included.
     crate::console::set_json(args.progress == ProgressFormat::Json);
-    let spec = JobSpec::new(&args.job)?;
+    let spec = Job::new(&args.job)?;
     let sixteen_bit = spec.sixteen_bit;
-    let warnings = super::warnings(&spec.seq);
+    let warnings = crate::warnings::for_sequence(&spec.seq);
     // With --pipe the stream is the product; files come too only when asked for explicitly.
     let files = match args.pipe.is_none() || spec.output_given {
         true => Some(spec.files(&args.job)?),
         false => None,
     };
-    let JobSpec { seq, frames, .. } = spec;
+    let Job { seq, frames, .. } = spec;
     if args.claim && (files.is_none() || args.pipe.is_some()) {
         return Err(Error::Usage(
             "--claim shares frame files between processes; it cannot be combined with --pipe"
@@ -70,7 +70,11 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     for w in &warnings {
         progress.warn(&format!("warning: {w}"));
     }
-    progress.start(plan.as_ref(), frames.len());
+    let planned = plan.as_ref().map(|p| (p.summary(), p.counts()));
+    let planned = planned
+        .as_ref()
+        .map(|(summary, counts)| (summary.as_str(), &counts[..]));
+    progress.start(planned, frames.len());
     if let (Some(plan), Some(files)) = (&plan, &files) {
         report_skipped(&progress, plan, files);
     }
@@ -78,7 +82,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     let claims = args
         .claim
         .then(|| Arc::new(Claims::new(Duration::from_secs(args.claim_timeout))));
-    let job = Job {
+    let batch = Batch {
         sequence: Arc::new(seq),
         tasks,
         files,
@@ -87,7 +91,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         threads,
         claims,
     };
-    let outcome = run_job(&pool, job, &frames, &mut progress)?;
+    let outcome = run_job(&pool, batch, &frames, &mut progress)?;
     finish(outcome, plan.as_ref(), stream.is_some())
 }
 
@@ -105,23 +109,24 @@ fn workers(asked: Option<u16>) -> Result<(rayon::ThreadPool, usize), Error> {
     Ok((pool, threads))
 }
 
-/// Runs the job (cooperating through claims if asked), then checks what it wrote.
+/// Runs the batch (cooperating through claims if asked), then checks what it wrote.
 fn run_job(
     pool: &rayon::ThreadPool,
-    job: Job,
+    batch: Batch,
     frames: &FrameSet,
     progress: &mut Progress,
 ) -> Result<Result<Outcome, RunError>, Error> {
     let mut written = FrameSet::new();
-    job.tasks
+    batch
+        .tasks
         .iter()
         .filter(|t| t.write_file)
         .for_each(|t| written.push(t.frame));
-    let (seq, files) = (Arc::clone(&job.sequence), job.files.clone());
-    schedule::install_interrupt_handler();
-    let outcome = match job.claims.is_some() {
-        true => cooperate(pool, job, frames, progress),
-        false => schedule::run_on(pool, job, progress),
+    let (seq, files) = (Arc::clone(&batch.sequence), batch.files.clone());
+    signals::install_interrupt_handler();
+    let outcome = match batch.claims.is_some() {
+        true => cooperate(pool, batch, frames, progress),
+        false => schedule::run_on(pool, batch, progress),
     };
     progress.finish(matches!(outcome, Ok(Outcome::Interrupted { .. })));
     if let (Ok(Outcome::Complete { .. }), Some(files)) = (&outcome, &files) {
@@ -153,13 +158,7 @@ fn verify(seq: &Sequence, written: &FrameSet, files: &Files) -> Result<(), Error
     bad.sort_by_key(|(n, _)| *n);
     let bad: Vec<String> = bad
         .iter()
-        .map(|(n, s)| {
-            format!(
-                "{} ({})",
-                files.pattern.frame_path(*n).display(),
-                describe(s)
-            )
-        })
+        .map(|(n, s)| format!("{} ({})", files.frame_path(*n).display(), describe(s)))
         .collect();
     Err(Error::Failed(format!(
         "frames written by this run changed before it ended: {}; run the same command again to render them",
@@ -182,7 +181,7 @@ fn describe(s: &State) -> String {
 /// whose owner died or went silent.
 fn cooperate(
     pool: &rayon::ThreadPool,
-    mut job: Job,
+    mut batch: Batch,
     frames: &FrameSet,
     progress: &mut Progress,
 ) -> Result<Outcome, RunError> {
@@ -191,14 +190,14 @@ fn cooperate(
     loop {
         let outcome = schedule::run_on(
             pool,
-            Job {
-                tasks: std::mem::take(&mut job.tasks),
-                claims: job.claims.clone(),
-                files: job.files.clone(),
-                sequence: Arc::clone(&job.sequence),
+            Batch {
+                tasks: std::mem::take(&mut batch.tasks),
+                claims: batch.claims.clone(),
+                files: batch.files.clone(),
+                sequence: Arc::clone(&batch.sequence),
                 stream: None,
                 stream_out: None,
-                threads: job.threads,
+                threads: batch.threads,
             },
             progress,
         )?;
@@ -206,13 +205,13 @@ fn cooperate(
             return Ok(outcome);
         };
         written += w;
-        if schedule::interrupted() {
+        if signals::interrupted() {
             return Ok(Outcome::Interrupted {
                 written,
                 streamed: 0,
             });
         }
-        let files = job.files.as_ref().expect("claim mode has files");
+        let files = batch.files.as_ref().expect("claim mode has files");
         if !held.is_empty() {
             if told.is_none_or(|t| t.elapsed() >= WAITING_REPORT_EVERY) {
                 report_waiting(progress, files, &held);
@@ -220,16 +219,16 @@ fn cooperate(
             }
             std::thread::sleep(Duration::from_millis(500));
         }
-        let plan = plan::plan(&job.sequence, frames, files, false);
-        job.tasks = tasks(frames, Some(&plan), false);
-        if job.tasks.is_empty() {
+        let plan = plan::plan(&batch.sequence, frames, files, false);
+        batch.tasks = tasks(frames, Some(&plan), false);
+        if batch.tasks.is_empty() {
             return Ok(Outcome::Complete {
                 written,
                 held: Vec::new(),
             });
         }
         if held.is_empty() {
-            progress.add_total(job.tasks.len() as u64);
+            progress.add_total(batch.tasks.len() as u64);
         }
     }
 }
@@ -244,7 +243,7 @@ fn report_waiting(progress: &Progress, files: &Files, held: &[u64]) {
     let claims: Vec<Held> = held
         .iter()
         .take(3)
-        .map(|&n| claim::held(&files.pattern.frame_path(n)))
+        .map(|&n| claim::held(&files.frame_path(n)))
         .collect();
     progress.waiting(&set.to_string(), held.len(), &claims);
 }
@@ -295,7 +294,7 @@ fn report_skipped(progress: &Progress, plan: &Plan, files: &Files) {
     if plan.force {
         return;
     }
-    let path = |n| files.pattern.frame_path(n).display().to_string();
+    let path = |n| files.frame_path(n).display().to_string();
     if progress.reports_skipped() {
         for n in plan.up_to_date.iter() {
             progress.frame_skipped(n, &path(n), "up-to-date");
@@ -393,13 +392,13 @@ fn finish(
         }
         Outcome::Interrupted { written, streamed } => Err(Error::Interrupted(
             interrupted_summary(written, streamed, plan, streaming),
-            schedule::interrupt_code(),
+            signals::interrupt_code(),
         )),
         // Ctrl-C in `rayreel … | ffmpeg …` reaches both: ffmpeg closing the pipe is then
         // the interruption, not a reader that had enough.
         Outcome::ReaderClosed { streamed } if reader_was_interrupted() => Err(Error::Interrupted(
             interrupted_summary(0, streamed, None, true),
-            schedule::interrupt_code(),
+            signals::interrupt_code(),
         )),
         Outcome::ReaderClosed { streamed } => {
             crate::console::note(&format!(
@@ -416,12 +415,12 @@ fn finish(
 fn reader_was_interrupted() -> bool {
     let start = Instant::now();
     while start.elapsed() < Duration::from_millis(200) {
-        if schedule::interrupted() {
+        if signals::interrupted() {
             return true;
         }
         std::thread::sleep(Duration::from_millis(10));
     }
-    schedule::interrupted()
+    signals::interrupted()
 }
 
 /// `1 frame`, `3 frames`.
@@ -432,11 +431,11 @@ pub(crate) fn plural(n: u64, noun: &str) -> String {
 /// `rayreel status`: the completeness of the output against the sequence; exit 0 only when
 /// every selected frame is up to date.
 pub fn status(args: RenderArgs) -> Result<(), Error> {
-    let spec = JobSpec::for_status(&args.job)?;
+    let spec = Job::for_status(&args.job)?;
     let files = spec.files(&args.job)?;
     let (seq, frames) = (spec.seq, spec.frames);
     let plan = plan::plan(&seq, &frames, &files, false);
-    let dir = plan::directory(&files.pattern.frame_path(0));
+    let dir = plan::directory(&files.frame_path(0));
     let mut lines = vec![format!("{}: {}", shown(&dir), plan.status_line())];
     for (label, set) in plan.by_state() {
         if !set.is_empty() {

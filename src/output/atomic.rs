@@ -9,8 +9,8 @@
 //! (claims, `.NAME.rayreel-claim`, do the same).
 
 use super::fingerprint::Hasher;
-use super::pattern::Pattern;
 use crate::frameset::FrameSet;
+use crate::pattern::{NAME_MAX, Pattern};
 use std::collections::HashSet;
 use std::fs::{self, File, OpenOptions};
 use std::io::Write;
@@ -21,9 +21,6 @@ use std::time::{Duration, SystemTime};
 
 /// Marker in our temporary names.
 pub const TEMP_MARKER: &str = ".rayreel-tmp-";
-
-/// The longest file name (one path component) Linux file systems take, in bytes.
-pub const NAME_MAX: usize = 255;
 
 /// The longest a temporary's name adds to NAME: `.`, the marker, a host name of at most 64
 /// bytes, `-`, a pid of at most 10 digits, `-` and 16 hex digits.

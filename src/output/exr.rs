@@ -3,29 +3,23 @@
 //! 1e10 for background, always 32-bit), ZIP compression, and header attributes for the
 //! frame number, time, fps, fingerprint and the standard `worldToCamera` and `worldToNDC`.
 
-use super::{Existing, Expected, FileFormat, FrameMeta, fingerprint};
+use super::fingerprint;
+use super::format::{EncodeError, Existing, Expected, ExrPrecision, FileFormat};
+use super::identity::FrameMeta;
 use crate::frame::Frame;
 use exr::prelude::*;
 use std::io::Cursor;
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
-pub enum Precision {
-    /// 16-bit half floats.
-    Half,
-    /// 32-bit floats.
-    Float,
-}
-
 pub fn encode(
     frame: &Frame,
-    precision: Precision,
+    precision: ExrPrecision,
     meta: &FrameMeta,
-) -> std::result::Result<Vec<u8>, String> {
+) -> std::result::Result<Vec<u8>, EncodeError> {
     let (w, h) = (frame.width as usize, frame.height as usize);
     let plane = |c: usize| -> Vec<f32> { frame.rgb.iter().skip(c).step_by(3).copied().collect() };
     let samples = |v: Vec<f32>| match precision {
-        Precision::Half => FlatSamples::F16(v.into_iter().map(f16::from_f32).collect()),
-        Precision::Float => FlatSamples::F32(v),
+        ExrPrecision::Half => FlatSamples::F16(v.into_iter().map(f16::from_f32).collect()),
+        ExrPrecision::Float => FlatSamples::F32(v),
     };
     let mut channels = SmallVec::<[AnyChannel<FlatSamples>; 4]>::new();
     for (name, c) in [("R", 0), ("G", 1), ("B", 2)] {
@@ -63,10 +57,7 @@ pub fn encode(
     };
     let layer = Layer::new((w, h), attributes, encoding, AnyChannels::sort(channels));
     let mut out = Cursor::new(Vec::new());
-    Image::from_layer(layer)
-        .write()
-        .to_buffered(&mut out)
-        .map_err(|e| e.to_string())?;
+    Image::from_layer(layer).write().to_buffered(&mut out)?;
     let mut bytes = out.into_inner();
     sort_attributes(&mut bytes)?;
     Ok(bytes)
@@ -75,8 +66,8 @@ pub fn encode(
 /// The exr crate writes custom attributes in hash-map order, which differs from process to
 /// process; same inputs must give the same bytes, so the header's attributes are put in name
 /// order. The header keeps its length, so the offset table behind it stays valid.
-fn sort_attributes(bytes: &mut [u8]) -> std::result::Result<(), String> {
-    let spans = attribute_spans(bytes).ok_or("the EXR header could not be read back")?;
+fn sort_attributes(bytes: &mut [u8]) -> std::result::Result<(), EncodeError> {
+    let spans = attribute_spans(bytes).ok_or(EncodeError::ExrHeader)?;
     let (start, end) = match (spans.first(), spans.last()) {
         (Some(first), Some(last)) => (first.0, last.1),
         _ => return Ok(()),
@@ -155,7 +146,7 @@ pub fn inspect(bytes: &[u8], expected: &Expected) -> Existing {
     let float = matches!(
         expected.format,
         FileFormat::Exr {
-            precision: Precision::Float
+            precision: ExrPrecision::Float
         }
     );
     let colour = |name: &str| {

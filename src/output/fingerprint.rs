@@ -4,13 +4,11 @@
 //! attribute), so a frame describes itself wherever it is copied, and shards on a shared
 //! directory need no common manifest.
 
+use super::format::{ExrPrecision, FileFormat};
 use crate::camera::{Camera, Pose};
-use crate::output::FileFormat;
-use crate::output::exr::Precision;
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
-use crate::shutter::{Exposure, Shutter};
-use crate::timeline::Timeline;
-use crate::tracer::{Adaptive, Sampler, Settings};
+use crate::settings::{Adaptive, Precision, Sampler, Settings};
+use crate::shutter::FrameView;
 use crate::transfer::Encoding;
 use glam::DVec3;
 
@@ -70,15 +68,15 @@ pub fn of_run(scene: &Scene, settings: &Settings, format: &FileFormat) -> Hasher
 }
 
 /// The fingerprint of one frame: the run's hash extended with the frame's number (its
-/// samples are seeded from it), its camera at the frame time, and what its exposure adds: the
-/// lens when open, and the camera at every instant of the shutter's open interval when the
+/// samples are seeded from it), its camera pose at the frame time, and what its exposure adds:
+/// the lens when open, and the camera at every instant of the shutter's open interval when the
 /// camera moves while it is open (a still camera gives the same image with a shutter or
 /// without, and the same fingerprint).
-pub fn of_frame(run: &Hasher, n: u64, timeline: &Timeline, shutter: Option<Shutter>) -> String {
+pub fn of_frame(run: &Hasher, view: &FrameView) -> String {
     let mut h = *run;
-    n.canon(&mut h);
-    timeline.pose_of(n).canon(&mut h);
-    match Exposure::of_frame(timeline, shutter, n) {
+    view.frame.canon(&mut h);
+    view.pose.canon(&mut h);
+    match &view.exposure {
         Ok(e) => {
             let lens = (e.camera.lens_radius > 0.0)
                 .then_some([e.camera.lens_radius, e.camera.focus_distance]);
@@ -316,7 +314,7 @@ impl Canon for Settings {
         }]);
         // Optional, so every f64 frame keeps the fingerprint it had: f32 adds the byte 2,
         // which no file-format tag (0, 1) that follows the settings takes.
-        if *precision == crate::tracer::Precision::F32 {
+        if *precision == Precision::F32 {
             h.write(&[2]);
         }
     }
@@ -333,7 +331,7 @@ impl Canon for FileFormat {
         match self {
             FileFormat::Png { sixteen_bit, .. } => tagged(h, 0, &[sixteen_bit]),
             FileFormat::Exr { precision } => {
-                let float = *precision == Precision::Float;
+                let float = *precision == ExrPrecision::Float;
                 tagged(h, 1, &[&float])
             }
         }
@@ -360,6 +358,8 @@ canon_struct!(Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shutter::Shutter;
+    use crate::timeline::Timeline;
 
     /// A still camera at (x, 0, 1) looking at the origin, with a lens of `aperture`.
     fn still(x: f64, aperture: f64) -> Timeline {
@@ -392,7 +392,7 @@ mod tests {
             alpha: false,
             exposure: 0.0,
             encoding: Encoding::Srgb,
-            precision: crate::tracer::Precision::F64,
+            precision: Precision::F64,
         };
         let scene = Scene {
             objects: Vec::new(),
@@ -403,7 +403,7 @@ mod tests {
         };
         let png = FileFormat::Png {
             sixteen_bit: false,
-            compression: crate::output::png::Compression::Fast,
+            compression: crate::output::format::Compression::Fast,
         };
         let run = of_run(&scene, &settings, &png);
         let mut bytes = Vec::new();
@@ -424,7 +424,9 @@ mod tests {
         assert_eq!(run.hex(), Hasher::new().write(&bytes).hex());
         // The frame's number, camera and lens each change it; a shutter on a still camera
         // and the compression do not.
-        let at = |x, aperture, n, shutter| of_frame(&run, n, &still(x, aperture), shutter);
+        let at = |x, aperture, n, shutter| {
+            of_frame(&run, &FrameView::of_frame(&still(x, aperture), shutter, n))
+        };
         let open = Some(Shutter {
             angle: 180.0,
             offset: 0.0,
@@ -435,12 +437,12 @@ mod tests {
         assert_eq!(at(0.0, 0.0, 0, None), at(0.0, 0.0, 0, open));
         let best = FileFormat::Png {
             sixteen_bit: false,
-            compression: crate::output::png::Compression::Best,
+            compression: crate::output::format::Compression::Best,
         };
         assert_eq!(run.hex(), of_run(&scene, &settings, &best).hex());
         // f32 appends the byte 2 after the encoding.
         let f32 = Settings {
-            precision: crate::tracer::Precision::F32,
+            precision: Precision::F32,
             ..settings
         };
         let n = bytes.len();

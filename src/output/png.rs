@@ -3,27 +3,19 @@
 //! for readers that know only those; linear: `gAMA` 1.0), with the fingerprint in a tEXt
 //! chunk ahead of the image data; and the check of an existing file.
 
-use super::{Existing, Expected, fingerprint};
+use super::fingerprint;
+pub use super::format::Compression;
+use super::format::{EncodeError, Existing, Expected};
 use crate::frame::Frame;
 use crate::transfer::Encoding;
 use png::{ScaledFloat, SourceChromaticities};
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
-pub enum Compression {
-    /// Quick deflate: the default, so encoding never holds back rendering.
-    Fast,
-    /// The png crate's balanced level.
-    Default,
-    /// Smallest files, slowest.
-    Best,
-}
 
 pub fn encode(
     frame: &Frame,
     sixteen_bit: bool,
     compression: Compression,
     text: &[(&str, String)],
-) -> Result<Vec<u8>, String> {
+) -> Result<Vec<u8>, EncodeError> {
     let mut out = Vec::with_capacity(frame.rgb.len() / 2);
     let mut enc = png::Encoder::new(&mut out, frame.width, frame.height);
     enc.set_color(match frame.alpha {
@@ -37,8 +29,7 @@ pub fn encode(
         Compression::Best => png::Compression::High,
     });
     for (key, value) in text {
-        enc.add_text_chunk(key.to_string(), value.clone())
-            .map_err(|e| e.to_string())?;
+        enc.add_text_chunk(key.to_string(), value.clone())?;
     }
     let data: Vec<u8> = if sixteen_bit {
         enc.set_depth(png::BitDepth::Sixteen);
@@ -51,9 +42,9 @@ pub fn encode(
         enc.set_depth(png::BitDepth::Eight);
         frame.to_rgb8()
     };
-    let mut writer = enc.write_header().map_err(|e| e.to_string())?;
-    writer.write_image_data(&data).map_err(|e| e.to_string())?;
-    writer.finish().map_err(|e| e.to_string())?;
+    let mut writer = enc.write_header()?;
+    writer.write_image_data(&data)?;
+    writer.finish()?;
     Ok(out)
 }
 

@@ -2,7 +2,8 @@
 //! alpha), or a sequence of PNGs.
 //! Nothing but frame bytes is ever written here.
 
-use super::png::{self, Compression};
+use super::format::{Compression, EncodeError};
+use super::png;
 use crate::frame::Frame;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -13,7 +14,11 @@ pub enum StreamFormat {
     Png,
 }
 
-pub fn encode(frame: &Frame, format: StreamFormat, sixteen_bit: bool) -> Result<Vec<u8>, String> {
+pub fn encode(
+    frame: &Frame,
+    format: StreamFormat,
+    sixteen_bit: bool,
+) -> Result<Vec<u8>, EncodeError> {
     match (format, sixteen_bit) {
         (StreamFormat::Raw, false) => Ok(frame.to_rgb8()),
         (StreamFormat::Raw, true) => Ok(frame

@@ -169,7 +169,7 @@ fn check_reach(path: &str, place: &Placement, mesh: &Mesh) -> Check<()> {
     let (lo, hi) = mesh.bounds();
     let far = place.translate.abs().max_element()
         + (place.scale.abs().max_element() * lo.abs().max(hi.abs()).max_element()) * 3f64.sqrt();
-    if !(far <= MAX_MAGNITUDE) {
+    if far.is_nan() || far > MAX_MAGNITUDE {
         return invalid(
             path,
             format!(

@@ -31,11 +31,10 @@ pub use settings::{
 pub use timeline::MAX_FIRST_FRAME;
 
 use crate::camera::{Camera, Degenerate, Pose};
-use crate::output::{atomic, pattern::Pattern};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
+use crate::settings::{Adaptive, Sampler, Settings};
 use crate::shutter::Shutter;
 use crate::timeline::{Ease, Key, Timeline};
-use crate::tracer::{Adaptive, Sampler, Settings};
 use glam::DVec3;
 pub use raw::Quality;
 use std::fmt::Display;

@@ -2,6 +2,7 @@
 //! and the command line are held to.
 
 use super::*;
+use crate::pattern::{NAME_MAX, Pattern};
 
 pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
     let check = |path: &str, r: Result<u32, String>| r.or_else(|m| invalid(path, m));
@@ -204,17 +205,17 @@ pub(crate) fn output_pattern(output: &str, last_frame: u64) -> Result<Pattern, S
             output.replace('\0', "\\0")
         ));
     }
-    let pattern = Pattern::new(output, last_frame)?;
+    let pattern = Pattern::new(output, last_frame).map_err(|e| e.to_string())?;
     // No frame's path is longer than the last one's (numbers are padded to one width or not).
     let last = pattern.frame_path(last_frame);
     for part in last.iter() {
         let part = part.to_string_lossy();
-        if part.len() > atomic::NAME_MAX {
+        if part.len() > NAME_MAX {
             return Err(format!(
                 "the name `{}` is {} bytes; a file or directory name may have at most {}",
                 abbreviated(&part),
                 part.len(),
-                atomic::NAME_MAX
+                NAME_MAX
             ));
         }
     }

@@ -11,9 +11,8 @@
 
 use super::bvh::Bvh;
 use super::intersect::{Hit, Ray, plane_hit, sphere_hit};
-use super::lanes::{F64x1, Lanes, MAX_LANES, Mask};
 use super::mesh::{Best, Instance, NO_TRIANGLE};
-use super::vec3::V3;
+use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{Object, Shape, closest_to_origin};
 use glam::DVec3;
 use std::ops::Range;

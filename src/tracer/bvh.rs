@@ -165,7 +165,7 @@ fn split(
     let extent = cmax - cmin;
     let mut best: Option<(f64, usize, usize)> = None;
     for axis in 0..3 {
-        if !(extent[axis] > 0.0) {
+        if extent[axis].is_nan() || extent[axis] <= 0.0 {
             continue;
         }
         if let Some((cost, bin)) = sah(tris, axis, cmin[axis], extent[axis])

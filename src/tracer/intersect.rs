@@ -8,8 +8,7 @@
 //!
 //! `Ray`, `intersect` and `nearest` are the one-ray view of the same code, for tests and tools.
 
-use super::lanes::{F64x1, Lanes, Mask};
-use super::vec3::V3;
+use crate::lanes::{F64x1, Lanes, Mask, V3};
 use crate::scene::{Object, Shape};
 use glam::DVec3;
 

@@ -6,9 +6,9 @@
 //! has is used unless `RAYREEL_KERNEL=scalar|avx2|avx512` asks for another (tests and
 //! `rayreel bench` compare them); every width gives the same bytes in each precision.
 use super::intersect::Ray;
-use super::lanes::Lanes;
 use super::rows::{self, Old, Pass, RowOut, RowStats};
 use super::{Precision, World};
+use crate::lanes::Lanes;
 use glam::DVec3;
 use std::sync::OnceLock;
 
@@ -132,11 +132,11 @@ impl Kernel {
     /// Runs `job` with this kernel's lanes in `precision`. A kernel the CPU lacks (only
     /// possible through `trace` or `render_with`) runs as the scalar one, with the same result.
     fn run(self, precision: Precision, job: Job) -> Done {
-        use super::lanes::{F32x1, F64x1};
+        use crate::lanes::{F32x1, F64x1};
         #[cfg(target_arch = "x86_64")]
         if self.supported() {
-            use super::lanes::Pair;
-            use super::lanes::x86::{F32x8, F32x16, F64x4, F64x8};
+            use crate::lanes::Pair;
+            use crate::lanes::x86::{F32x8, F32x16, F64x4, F64x8};
             // SAFETY: `supported` said the CPU has the feature the entry point enables.
             match (self, precision) {
                 (Kernel::Avx2, Precision::F64) => return unsafe { x86::avx2::<Pair<F64x4>>(job) },
@@ -193,7 +193,7 @@ impl Job<'_, '_> {
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::{Done, Job};
-    use crate::tracer::lanes::Lanes;
+    use crate::lanes::Lanes;
 
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn avx2<V: Lanes>(job: Job) -> Done {

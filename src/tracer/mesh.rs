@@ -10,9 +10,8 @@
 
 use super::accel::{Rays, Slabs};
 use super::bvh::{Bvh, Node, Tri};
-use super::lanes::{Lanes, MAX_LANES, Mask};
 use super::triangle::{barycentrics, triangle_hit};
-use super::vec3::V3;
+use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
 use crate::scene::Placement;
 use glam::{DMat3, DVec3};
 use std::sync::Arc;

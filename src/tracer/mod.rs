@@ -6,112 +6,28 @@
 //! count, order of work or lane width.
 
 pub mod accel;
-pub mod bvh;
+pub(crate) mod bvh;
 pub mod glass;
 pub mod intersect;
 pub mod kernel;
-pub mod lanes;
-pub mod mesh;
+mod mesh;
 mod polygon;
 pub mod precision;
 mod rows;
 pub mod sample;
 pub mod shade;
-pub mod triangle;
-pub mod vec3;
+mod triangle;
 
 use crate::frame::Frame;
 use crate::scene::Scene;
-use crate::shutter::{Exposure, Shutter};
-use crate::transfer::Encoding;
+pub use crate::settings::{Adaptive, Precision, Sampler, Settings};
+use crate::shutter::Exposure;
 use glam::DVec3;
 pub use kernel::Kernel;
 use rayon::prelude::*;
 use rows::{Pass, Planes, RowOut, RowStats};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-
-/// What decides a frame besides the scene and the camera.
-#[derive(Clone, Copy, PartialEq)]
-pub struct Settings {
-    pub width: u32,
-    pub height: u32,
-    /// Surfaces one path may visit: 1 = no reflections.
-    pub max_depth: u32,
-    /// Also record the eye-ray distance to the first hit.
-    pub depth: bool,
-    /// Eye rays per pixel (uniform sampling), or the first pass of adaptive sampling.
-    pub samples: u32,
-    pub adaptive: Option<Adaptive>,
-    pub sampler: Sampler,
-    /// Record coverage (alpha): eye rays that miss add nothing instead of the background.
-    pub alpha: bool,
-    /// Stops: the colour is multiplied by 2^exposure.
-    pub exposure: f64,
-    /// How the frame's integer values encode its colour (the tracer only passes it on).
-    pub encoding: Encoding,
-    /// Motion blur: None when `render.shutter` is 0.
-    pub shutter: Option<Shutter>,
-    /// The arithmetic of the lanes: f64 (the reference) or f32 (twice the lanes per
-    /// instruction, camera-relative coordinates).
-    pub precision: Precision,
-}
-
-/// The float type the tracer's lanes compute in (`render.precision`, `--precision`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum Precision {
-    /// IEEE double precision: the reference every other setting is measured against.
-    #[default]
-    F64,
-    /// IEEE single precision, in coordinates relative to the frame's camera.
-    F32,
-}
-
-impl Precision {
-    pub fn name(self) -> &'static str {
-        match self {
-            Precision::F64 => "f64",
-            Precision::F32 => "f32",
-        }
-    }
-}
-
-/// The derived form without `shutter`, whose effect shows in each frame's cameras (see
-/// `shutter::Exposure`); the fingerprint does not use this text (see `output::fingerprint::Canon`).
-impl std::fmt::Debug for Settings {
-    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.debug_struct("Settings")
-            .field("width", &self.width)
-            .field("height", &self.height)
-            .field("max_depth", &self.max_depth)
-            .field("depth", &self.depth)
-            .field("samples", &self.samples)
-            .field("adaptive", &self.adaptive)
-            .field("sampler", &self.sampler)
-            .field("alpha", &self.alpha)
-            .field("exposure", &self.exposure)
-            .field("encoding", &self.encoding)
-            .field("precision", &self.precision)
-            .finish()
-    }
-}
-
-/// Adaptive sampling: every pixel gets `samples`; pixels whose samples disagree, or whose
-/// neighbours differ, by more than `threshold` are rendered again with `max_samples`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Adaptive {
-    pub threshold: f32,
-    pub max_samples: u32,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Sampler {
-    /// Jittered n×n grid, or R2 low-discrepancy for other counts.
-    Stratified,
-    /// Independent uniform positions, kept to measure what stratification buys.
-    Random,
-}
 
 /// A scene ready to trace: the validated data and the geometry built from it once.
 #[derive(Debug, Clone)]
@@ -155,11 +71,6 @@ impl World {
     /// Whether some object is a mesh (shading then lifts secondary rays off triangles).
     pub fn has_meshes(&self) -> bool {
         !self.bvhs.is_empty()
-    }
-
-    /// The hierarchy of `scene.meshes[i]` (for `check` and `bench`).
-    pub fn bvh(&self, i: usize) -> &bvh::Bvh {
-        &self.bvhs[i]
     }
 
     /// This world in coordinates whose origin is `by` (see `Scene::shifted`), its boxes

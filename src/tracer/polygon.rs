@@ -9,10 +9,9 @@
 
 use super::World;
 use super::accel::{Nearest, Rays};
-use super::lanes::{Lanes, MAX_LANES, Mask};
 use super::mesh::NO_TRIANGLE;
 use super::shade::Lift;
-use super::vec3::V3;
+use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{MeshShading, Shape};
 use glam::DVec3;
 
@@ -135,12 +134,7 @@ impl<V: Lanes> MeshLanes<V> {
     /// with the face normal turned to the ray): the lanes, point, normal, the direction light
     /// leaves towards the viewer reversed (normalize(p − o), o the hit ray's origin) and lift.
     #[inline(always)]
-    pub(super) fn station(
-        &self,
-        station: usize,
-        ray: &Rays<V>,
-        lift: &Lift<V>,
-    ) -> (V::M, V3<V>, V3<V>, V3<V>, Lift<V>) {
+    pub(super) fn station(&self, station: usize, ray: &Rays<V>, lift: &Lift<V>) -> Station<V> {
         let (lanes, p, n) = if station < 3 {
             let back = self.geom.dot(ray.dir).gt(V::splat(0.0));
             let p = V3::from_fn(|k| self.corners[station][k]);
@@ -160,7 +154,13 @@ impl<V: Lanes> MeshLanes<V> {
             normal: lift.normal,
             delta: self.lift_at(p),
         };
-        (lanes, p, n, (p - ray.origin).normalize(), at)
+        Station {
+            lanes,
+            point: p,
+            normal: n,
+            view: (p - ray.origin).normalize(),
+            lift: at,
+        }
     }
 
     /// The colour of each lane from the stations' light: `lit[0]` at the hit, on `gouraud`
@@ -185,6 +185,16 @@ impl<V: Lanes> MeshLanes<V> {
         let delta = V::from_fn(|k| lift_distance(DVec3::new(x[k], y[k], z[k]), 0.0, u));
         V::select(self.is_mesh, delta, V::splat(0.0))
     }
+}
+
+/// Where a station lights its lanes: the point, the normal facing the ray, the direction from
+/// the viewer (in the place of the ray's), and the lift of its shadow rays.
+pub(super) struct Station<V: Lanes> {
+    pub lanes: V::M,
+    pub point: V3<V>,
+    pub normal: V3<V>,
+    pub view: V3<V>,
+    pub lift: Lift<V>,
 }
 
 /// One lane's values while they are gathered.

@@ -6,12 +6,11 @@
 
 use super::accel::{FromOrigin, Rays};
 use super::intersect::Ray;
-use super::lanes::{Lanes, MAX_LANES, Mask};
 use super::sample::{Dims, Pattern, Seed};
 use super::shade::{self, Eye};
-use super::vec3::V3;
 use super::{Sampler, Samples, Settings, World, finite};
 use crate::camera::{Camera, screen_points};
+use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
 use crate::shutter::{Exposure, INSTANTS};
 use glam::DVec3;
 use std::ops::{Add, Div, Mul};

@@ -9,9 +9,8 @@
 use super::World;
 use super::accel::{FromOrigin, Nearest, Rays};
 use super::intersect::Ray;
-use super::lanes::{F64x1, Lanes, MAX_LANES, Mask};
 use super::polygon::MeshLanes;
-use super::vec3::V3;
+use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{Light, Material, Shape};
 use glam::DVec3;
 
@@ -156,8 +155,8 @@ pub(super) fn shade_hit<'a, V: Lanes>(
     for (station, out) in lit.iter_mut().enumerate().take(stations) {
         let (lanes, p, n, view, at) = match (station, &mesh, &lift) {
             (1.., Some(m), Some(l)) => {
-                let (lanes, p, n, view, at) = m.station(station - 1, ray, l);
-                (lanes, p, n, view, Some(at))
+                let s = m.station(station - 1, ray, l);
+                (s.lanes, s.point, s.normal, s.view, Some(s.lift))
             }
             _ => (here, point, normal, ray.dir, None),
         };

@@ -14,8 +14,7 @@
 //! Distance: t = (a·n) / (d·n) with n = (v1 − v0) × (v2 − v0) precomputed per triangle.
 //! Barycentrics: u = w1 / (w0 + w1 + w2), v = w2 / (w0 + w1 + w2) (weights of v1 and v2).
 
-use super::lanes::{Lanes, Mask};
-use super::vec3::V3;
+use crate::lanes::{Lanes, Mask, V3};
 
 /// (b × c)·d in the operation order of docs/spec/mesh.md: x, y and z of the cross product as
 /// glam forms them (b.y·c.z − c.y·b.z, …), then the dot product ((x·dx + y·dy) + z·dz).
@@ -71,7 +70,7 @@ pub fn barycentrics<V: Lanes>(w: [V; 3]) -> (V, V) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tracer::lanes::F64x1;
+    use crate::lanes::F64x1;
     use glam::DVec3;
 
     fn hit(tri: [DVec3; 3], o: DVec3, d: DVec3) -> Option<f64> {

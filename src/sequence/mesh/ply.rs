@@ -296,7 +296,7 @@ fn faces(e: &Element, body: &mut Body, soup: &mut Soup) -> Result<(), Fail> {
                 continue;
             };
             let len = body.value(c).ok_or_else(|| truncated("face", i))?;
-            if k == list && !(len >= 3.0) {
+            if k == list && (len.is_nan() || len < 3.0) {
                 return Err((
                     Some(format!("face {i}")),
                     format!("a face needs at least 3 vertices (got {len})"),

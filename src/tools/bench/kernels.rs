@@ -1,7 +1,7 @@
 //! `rayreel bench --only kernels`: the lane widths against each other on the talk, every
 //! kernel in f64 and the packet kernels in f32 too (`Settings.precision`), in the same rounds.
 
-use super::{Options, Sequence, TALK, first_exposure, load, pool, timing};
+use super::{BenchError, Options, Sequence, TALK, first_exposure, load, pool, timing};
 use crate::tracer::{self, Kernel, Precision, World};
 use std::time::Instant;
 
@@ -46,7 +46,7 @@ fn variants() -> Vec<Variant> {
 /// round by round so a busy machine slows them alike; each ratio is the median of the rounds'
 /// ratios to the scalar kernel. Also checks that every width wrote the same frame in each
 /// precision, and gives the widest kernel's f32 speed over its f64 speed.
-pub(super) fn kernels(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), String> {
+pub(super) fn kernels(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), BenchError> {
     let variants = variants();
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let big = if o.quick { (320, 180) } else { (1920, 1080) };
@@ -63,9 +63,9 @@ pub(super) fn kernels(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Resu
     ));
     let pool = pool(cores)?;
     if !TALK.contains("  samples: 1\n") {
-        return Err(
-            "bench: talk.yaml no longer says `samples: 1`; update the kernels bench".into(),
-        );
+        return Err(BenchError::Stale(
+            "talk.yaml no longer says `samples: 1`; update the kernels bench",
+        ));
     }
     for (name, size, setting) in cases {
         let text = TALK.replace("  samples: 1\n", &format!("  {setting}\n"));
@@ -97,7 +97,7 @@ fn kernel_rounds(
     seq: &Sequence,
     variants: &[Variant],
     runs: usize,
-) -> Result<Rounds, String> {
+) -> Result<Rounds, BenchError> {
     let world = World::new(seq.scene.clone());
     let exposure = first_exposure(seq)?;
     let mut seconds = vec![Vec::new(); variants.len()];

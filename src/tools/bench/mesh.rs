@@ -3,7 +3,7 @@
 //! makes them small), in f64 and f32, and a 1M-triangle frame at 1280×720 with default sampling
 //! against the talk's scene at the same settings.
 
-use super::{Options, load, render_only, repeat};
+use super::{BenchError, Options, load, render_only, repeat};
 use crate::scene::{Mesh, MeshShading, Object, Placement, Shape};
 use crate::sequence::Sequence;
 use crate::tools::meshgen;
@@ -14,7 +14,12 @@ use std::sync::Arc;
 
 /// One model in a scene of its own: a clay material, one point light, no floor (so frames
 /// cast exactly eye rays and one shadow ray per hit, as the Embree harness does).
-fn scene(mesh: Mesh, camera: &str, (w, h): (u32, u32), extra: &str) -> Result<Sequence, String> {
+fn scene(
+    mesh: Mesh,
+    camera: &str,
+    (w, h): (u32, u32),
+    extra: &str,
+) -> Result<Sequence, BenchError> {
     let text = format!(
         "render: {{ {extra} }}
 materials:
@@ -43,7 +48,7 @@ camera: {camera}
     Ok(seq)
 }
 
-pub(super) fn meshes(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), String> {
+pub(super) fn meshes(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), BenchError> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let size = if o.quick { (320, 180) } else { (1920, 1080) };
     let models = if o.quick {
@@ -98,7 +103,7 @@ fn against_talk(
     out: &mut dyn FnMut(&str),
     cmd: &str,
     cores: usize,
-) -> Result<(), String> {
+) -> Result<(), BenchError> {
     let size = if o.quick { (320, 180) } else { (1280, 720) };
     let blob = if o.quick {
         meshgen::blob(100, 50)

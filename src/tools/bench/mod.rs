@@ -5,11 +5,12 @@
 //! and fields of 4 to 100 000 spheres for the acceleration structure.
 
 use crate::frame::Frame;
-use crate::output::{FileFormat, pattern::Pattern, png::Compression, stream::StreamFormat};
+use crate::output::{Compression, FileFormat, Files, stream::StreamFormat};
+use crate::pattern::{Pattern, PatternError};
 use crate::progress::Progress;
-use crate::schedule::{self, Files, Job, Task};
-use crate::sequence::{self, Sequence};
-use crate::shutter::Exposure;
+use crate::schedule::{self, Batch, RunError, Task};
+use crate::sequence::{self, LoadError, Sequence};
+use crate::shutter::{Exposure, NoCamera};
 use crate::tracer::{self, World};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -23,24 +24,50 @@ const TALK: &str = include_str!("../../../sequences/talk.yaml");
 const TALK_ORBIT: &str = include_str!("../../../sequences/bench/talk_orbit.yaml");
 const TALK_POV: &str = include_str!("../../../sequences/bench/talk_orbit.pov");
 
+/// Why a benchmark could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    #[error(transparent)]
+    Workers(#[from] rayon::ThreadPoolBuildError),
+    #[error(transparent)]
+    Camera(#[from] NoCamera),
+    #[error(transparent)]
+    Run(#[from] RunError),
+    #[error(transparent)]
+    Pattern(#[from] PatternError),
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    /// A built-in scene no longer has the text a benchmark edits in it.
+    #[error("bench: {0}")]
+    Stale(&'static str),
+    /// A program the benchmark runs (`rayreel render`, `povray`) failed.
+    #[error("{0} failed")]
+    Failed(&'static str),
+}
+
 /// Median, min and max of some seconds.
 #[derive(Debug, Clone, Copy)]
-pub struct Timing {
+pub struct Spread {
     pub median: f64,
     pub min: f64,
     pub max: f64,
 }
 
-fn timing(mut t: Vec<f64>) -> Timing {
+fn timing(mut t: Vec<f64>) -> Spread {
     t.sort_by(f64::total_cmp);
-    Timing {
+    Spread {
         median: t[t.len() / 2],
         min: t[0],
         max: t[t.len() - 1],
     }
 }
 
-fn repeat(runs: usize, mut f: impl FnMut() -> Result<(), String>) -> Result<Timing, String> {
+fn repeat(
+    runs: usize,
+    mut f: impl FnMut() -> Result<(), BenchError>,
+) -> Result<Spread, BenchError> {
     let mut t = Vec::with_capacity(runs);
     for _ in 0..runs {
         let start = Instant::now();
@@ -50,8 +77,8 @@ fn repeat(runs: usize, mut f: impl FnMut() -> Result<(), String>) -> Result<Timi
     Ok(timing(t))
 }
 
-fn load(text: &str, (width, height): (u32, u32)) -> Result<Sequence, String> {
-    let mut seq = sequence::parse(Path::new("bench.yaml"), text).map_err(|e| e.to_string())?;
+fn load(text: &str, (width, height): (u32, u32)) -> Result<Sequence, BenchError> {
+    let mut seq = sequence::parse(Path::new("bench.yaml"), text)?;
     (seq.settings.width, seq.settings.height) = (width, height);
     Ok(seq)
 }
@@ -68,16 +95,15 @@ fn busy_warning(loadavg: &str, cores: usize) -> Option<String> {
     })
 }
 
-fn pool(threads: usize) -> Result<rayon::ThreadPool, String> {
-    rayon::ThreadPoolBuilder::new()
+fn pool(threads: usize) -> Result<rayon::ThreadPool, BenchError> {
+    Ok(rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
-        .build()
-        .map_err(|e| e.to_string())
+        .build()?)
 }
 
 /// The cameras of frame 0.
-fn first_exposure(seq: &Sequence) -> Result<Exposure, String> {
-    Exposure::of_frame(&seq.timeline, seq.settings.shutter, 0).map_err(|e| e.to_string())
+fn first_exposure(seq: &Sequence) -> Result<Exposure, BenchError> {
+    Ok(Exposure::of_frame(&seq.timeline, seq.settings.shutter, 0)?)
 }
 
 /// Renders frame 0 `runs` times on `threads` threads; returns the timing and one frame.
@@ -86,7 +112,7 @@ fn render_only(
     seq: &Sequence,
     threads: usize,
     runs: usize,
-) -> Result<(Timing, Frame), String> {
+) -> Result<(Spread, Frame), BenchError> {
     let exposure = first_exposure(seq)?;
     let pool = pool(threads)?;
     let mut frame = None;
@@ -105,7 +131,7 @@ fn render_frames(
     seq: &Sequence,
     frames: u64,
     threads: usize,
-) -> Result<f64, String> {
+) -> Result<f64, BenchError> {
     let pool = pool(threads)?;
     let start = Instant::now();
     for n in 0..frames {
@@ -120,7 +146,7 @@ fn sequence_run(
     frames: u64,
     threads: usize,
     png_in: Option<&Path>,
-) -> Result<f64, String> {
+) -> Result<f64, BenchError> {
     let files = match png_in {
         Some(dir) => Some(Files {
             pattern: Pattern::new(&dir.join("f_####.png").to_string_lossy(), frames)?,
@@ -131,7 +157,7 @@ fn sequence_run(
         }),
         None => None,
     };
-    let job = Job {
+    let batch = Batch {
         sequence: Arc::new(seq.clone()),
         tasks: (0..frames)
             .map(|frame| Task {
@@ -146,7 +172,7 @@ fn sequence_run(
         claims: None,
     };
     let start = Instant::now();
-    schedule::run(job, &mut Progress::new(frames, frames, true))?;
+    schedule::run(batch, &mut Progress::new(frames, frames, true))?;
     Ok(start.elapsed().as_secs_f64())
 }
 
@@ -185,7 +211,7 @@ pub struct Options {
 }
 
 /// Runs the benchmarks, printing lines as they finish.
-pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
+pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), BenchError> {
     let want = |name: &str| o.only.as_deref().is_none_or(|w| w == name);
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let (w, h) = if o.quick { (320, 180) } else { (1920, 1080) };
@@ -263,7 +289,7 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
         let frames = if o.quick { 4 } else { 12 };
         let orbit = load(TALK_ORBIT, (w, h))?;
         let dir = std::env::temp_dir().join(format!("rayreel-bench-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+        std::fs::create_dir_all(&dir)?;
         let raw = timing(
             (0..o.runs)
                 .map(|_| sequence_run(&orbit, frames, cores, None))
@@ -273,7 +299,7 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), String> {
             (0..o.runs)
                 .map(|_| {
                     let _ = std::fs::remove_dir_all(&dir);
-                    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+                    std::fs::create_dir_all(&dir)?;
                     sequence_run(&orbit, frames, cores, Some(&dir))
                 })
                 .collect::<Result<_, _>>()?,
@@ -311,7 +337,7 @@ fn glass(
     world: &World,
     out: &mut dyn FnMut(&str),
     cmd: &str,
-) -> Result<(), String> {
+) -> Result<(), BenchError> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let (tt, t) = render_only(world, talk, cores, o.runs)?;
     for depth in [3, 8] {
@@ -322,7 +348,9 @@ fn glass(
             )
             .replace("max_depth: 3", &format!("max_depth: {depth}"));
         if !text.contains("transmission") {
-            return Err("bench: talk.yaml's red material changed; update the glass bench".into());
+            return Err(BenchError::Stale(
+                "talk.yaml's red material changed; update the glass bench",
+            ));
         }
         let glass = load(&text, (w, h))?;
         let (tg, g) = render_only(&World::new(glass.scene.clone()), &glass, cores, o.runs)?;
@@ -341,7 +369,7 @@ fn glass(
 /// Per-ray cost as the sphere count grows, with the hierarchy's build time. Every round times
 /// every count, so a busy moment slows them alike; each ratio is the median over rounds of
 /// that round's ratio to 4 spheres.
-fn scaling(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), String> {
+fn scaling(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), BenchError> {
     let counts: &[usize] = if o.quick {
         &[4, 100, 1000]
     } else {
@@ -353,7 +381,7 @@ fn scaling(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), Stri
     ));
     let mut scenes = Vec::new();
     for &n in counts {
-        let seq = sequence::parse(Path::new("field.yaml"), &field(n)).map_err(|e| e.to_string())?;
+        let seq = sequence::parse(Path::new("field.yaml"), &field(n))?;
         let start = Instant::now();
         let world = World::new(seq.scene.clone());
         scenes.push((seq, world, start.elapsed().as_secs_f64()));
@@ -387,25 +415,24 @@ fn scaling(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), Stri
 }
 
 /// The 24-frame 640x360 orbit end to end (the binary, to PNG files) against POV-Ray 3.7.
-fn povray(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), String> {
+fn povray(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), BenchError> {
     let dir = std::env::temp_dir().join(format!("rayreel-pov-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    std::fs::create_dir_all(&dir)?;
     let (seq_file, pov_file) = (dir.join("talk_orbit.yaml"), dir.join("talk_orbit.pov"));
-    std::fs::write(&seq_file, TALK_ORBIT).map_err(|e| e.to_string())?;
-    std::fs::write(&pov_file, TALK_POV).map_err(|e| e.to_string())?;
-    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    std::fs::write(&seq_file, TALK_ORBIT)?;
+    std::fs::write(&pov_file, TALK_POV)?;
+    let exe = std::env::current_exe()?;
     let ours = repeat(o.runs, || {
         let _ = std::fs::remove_dir_all(dir.join("rr"));
         let status = std::process::Command::new(&exe)
             .args(["render", &seq_file.to_string_lossy(), "-q", "-o"])
             .arg(dir.join("rr/frame_##.png"))
-            .status()
-            .map_err(|e| e.to_string())?;
+            .status()?;
         status
             .success()
             .then_some(())
-            .ok_or("rayreel render failed".to_string())
+            .ok_or(BenchError::Failed("rayreel render"))
     })?;
     let mut line = format!(
         "talk orbit 24 frames 640x360 to PNG, end to end: rayreel {:.2} s ({:.2}-{:.2})",
@@ -416,7 +443,7 @@ fn povray(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), Strin
         .output();
     if pov.is_ok() {
         let theirs = repeat(o.runs.min(3), || {
-            std::fs::create_dir_all(dir.join("pov")).map_err(|e| e.to_string())?;
+            std::fs::create_dir_all(dir.join("pov"))?;
             let status = std::process::Command::new("povray")
                 .arg(format!("+I{}", pov_file.display()))
                 .args(["+W640", "+H360", "+KFI0", "+KFF23", "-A", "-D", "-V", "-GA"])
@@ -427,12 +454,11 @@ fn povray(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Result<(), Strin
                 .arg(format!("+O{}", dir.join("pov/frame.png").display()))
                 .stdout(std::process::Stdio::null())
                 .stderr(std::process::Stdio::null())
-                .status()
-                .map_err(|e| e.to_string())?;
+                .status()?;
             status
                 .success()
                 .then_some(())
-                .ok_or("povray failed".to_string())
+                .ok_or(BenchError::Failed("povray"))
         })?;
         let _ = write!(
             line,

@@ -6,7 +6,7 @@
 //! the f64 image (the reference itself is always f64).
 
 use crate::frame::Frame;
-use crate::schedule::render_with;
+use crate::schedule::{RunError, render_with};
 use crate::sequence::{Quality, Sequence, preset};
 use crate::tracer::{Adaptive, Precision, Sampler, Settings, World};
 use crate::transfer::Encoding;
@@ -32,7 +32,7 @@ pub const F32_TARGET_OFF2: f64 = 0.0005;
 
 /// How far an image is from the reference, in 8-bit levels.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Error {
+pub struct Distance {
     pub rmse: f64,
     pub psnr: f64,
     pub max: u8,
@@ -42,7 +42,7 @@ pub struct Error {
     pub off2: f64,
 }
 
-pub fn compare(a: &[u8], b: &[u8]) -> Error {
+pub fn compare(a: &[u8], b: &[u8]) -> Distance {
     assert_eq!(a.len(), b.len(), "images of different sizes");
     let mut sum = 0.0;
     let mut max = 0u8;
@@ -65,7 +65,7 @@ pub fn compare(a: &[u8], b: &[u8]) -> Error {
         20.0 * (255.0 / rmse).log10()
     };
     let pixels = (a.len() / 3) as f64;
-    Error {
+    Distance {
         rmse,
         psnr,
         max,
@@ -84,7 +84,7 @@ pub struct Row {
     pub half: bool,
     pub samples_per_pixel: f64,
     pub seconds: [f64; 3],
-    pub error: Error,
+    pub error: Distance,
     /// Precision rows only: against the f64 render of the same settings.
     pub versus_f64: Option<Versus>,
 }
@@ -94,18 +94,13 @@ pub struct Row {
 pub struct Versus {
     /// The median over rounds of that round's f64 time over this row's time.
     pub speedup: f64,
-    pub error: Error,
+    pub error: Distance,
 }
 
 /// Renders frame `n` with `settings` in place of the sequence's (building the geometry; the
 /// measurement itself builds it once for all its renders).
-pub fn render(seq: &Sequence, n: u64, settings: &Settings) -> Result<Frame, String> {
-    Ok(render_with(
-        &World::new(seq.scene.clone()),
-        seq,
-        n,
-        settings,
-    )?)
+pub fn render(seq: &Sequence, n: u64, settings: &Settings) -> Result<Frame, RunError> {
+    render_with(&World::new(seq.scene.clone()), seq, n, settings)
 }
 
 /// The reference `measure` compares against, for a scene whose paths are trees or not.
@@ -193,7 +188,7 @@ fn precision_rows(
     n: u64,
     runs: usize,
     ref_image: &[u8],
-) -> Result<Vec<Row>, String> {
+) -> Result<Vec<Row>, RunError> {
     let pair = precisions(&seq.settings);
     let mut times = [Vec::new(), Vec::new()];
     let mut out = [(Vec::new(), 0.0), (Vec::new(), 0.0)];
@@ -232,7 +227,7 @@ fn timed(
     s: &Settings,
     half: bool,
     runs: usize,
-) -> Result<(Vec<u8>, f64, Vec<f64>), String> {
+) -> Result<(Vec<u8>, f64, Vec<f64>), RunError> {
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..runs {
@@ -282,7 +277,7 @@ pub struct Report {
     pub reference: (u32, u32),
     pub reference_seconds: f64,
     /// Error of a reference with half the samples, against the reference.
-    pub convergence: Error,
+    pub convergence: Distance,
     pub rows: Vec<Row>,
 }
 
@@ -292,7 +287,7 @@ pub fn measure(
     n: u64,
     runs: usize,
     progress: &mut dyn FnMut(&str),
-) -> Result<Report, String> {
+) -> Result<Report, RunError> {
     let world = World::new(seq.scene.clone());
     let reference = reference_settings(&seq.settings, world.trees());
     let start = Instant::now();

@@ -34,7 +34,7 @@ use panel::*;
 use plot::*;
 use style::*;
 
-pub use checks::{inside_warnings, precision_warnings};
+pub use crate::frameset::evenly_spaced;
 pub use panel::{Panel, panels};
 pub use path_plot::path_plot;
 pub use sheet::{SheetLayout, TileOrigin, contact_sheet};
@@ -48,7 +48,26 @@ use crate::timeline::{Path as TimelinePath, Timeline};
 use crate::tracer::World;
 use glam::DVec3;
 use image::{Rgb, RgbImage};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// Why a preview picture could not be made or written.
+#[derive(Debug, thiserror::Error)]
+pub enum PreviewError {
+    #[error("no frames to put on the contact sheet")]
+    NoFrames,
+    #[error("frame {frame} is outside the timeline, which has frames 0-{last}")]
+    OutsideTimeline { frame: u64, last: u64 },
+    #[error("{}: cannot encode: {source}", path.display())]
+    Encode {
+        path: PathBuf,
+        source: image::ImageError,
+    },
+    #[error("{}: cannot write: {source}", path.display())]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+}
 
 /// Default number of contact-sheet tiles.
 pub const DEFAULT_TILES: u64 = 12;
@@ -58,29 +77,7 @@ pub const MAX_TILES: u64 = 400;
 pub const TILE_WIDTH: u32 = 256;
 
 // ---------------------------------------------------------------------------------------------
-// Which frames, and how small
-
-/// `n` frames spread evenly over `0..frame_count`, first and last included:
-/// n_k = round(k·(frame_count − 1)/(n − 1)), ascending and without repeats.
-pub fn evenly_spaced(frame_count: u64, n: u64) -> Vec<u64> {
-    if frame_count == 0 || n == 0 {
-        return Vec::new();
-    }
-    if n == 1 {
-        return vec![0];
-    }
-    // Steps shorter than one frame round onto every frame: skip building n values.
-    if n >= frame_count {
-        return (0..frame_count).collect();
-    }
-    let (last, d) = (u128::from(frame_count - 1), u128::from(n - 1));
-    // Integer rounding (half up) so the choice is exact for any frame count.
-    let mut out: Vec<u64> = (0..u128::from(n))
-        .map(|k| ((2 * k * last + d) / (2 * d)) as u64)
-        .collect();
-    out.dedup();
-    out
-}
+// How small
 
 /// The sequence as the contact sheet renders it: the draft preset (1 sample, 2 surfaces per
 /// path, which keeps reflections visible but cheap) at `tile_w`×`tile_h` pixels, opaque (the
@@ -104,28 +101,18 @@ pub fn tile_height(seq: &Sequence, tile_w: u32) -> u32 {
 }
 
 /// Encodes `img` as PNG and writes it atomically (a complete file or none) to `path`.
-pub fn write_png(path: &Path, img: &RgbImage) -> Result<(), String> {
+pub fn write_png(path: &Path, img: &RgbImage) -> Result<(), PreviewError> {
     let mut bytes = std::io::Cursor::new(Vec::new());
+    let path_buf = || path.to_path_buf();
     img.write_to(&mut bytes, image::ImageFormat::Png)
-        .map_err(|e| format!("{}: cannot encode: {e}", path.display()))?;
-    crate::output::atomic::write_atomic(path, bytes.get_ref())
-        .map_err(|e| format!("{}: cannot write: {e}", path.display()))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn evenly_spaced_hits_both_ends() {
-        assert_eq!(evenly_spaced(144, 12).first(), Some(&0));
-        assert_eq!(evenly_spaced(144, 12).last(), Some(&143));
-        assert_eq!(evenly_spaced(144, 12).len(), 12);
-        assert_eq!(evenly_spaced(5, 3), vec![0, 2, 4]);
-        assert_eq!(evenly_spaced(4, 12), vec![0, 1, 2, 3]);
-        assert_eq!(evenly_spaced(10, 1), vec![0]);
-        assert_eq!(evenly_spaced(1, 12), vec![0]);
-        // round(k·3/2) for k = 0..2 is 0, 2 (1.5 rounds up), 3.
-        assert_eq!(evenly_spaced(4, 3), vec![0, 2, 3]);
-    }
+        .map_err(|source| PreviewError::Encode {
+            path: path_buf(),
+            source,
+        })?;
+    crate::output::atomic::write_atomic(path, bytes.get_ref()).map_err(|source| {
+        PreviewError::Write {
+            path: path_buf(),
+            source,
+        }
+    })
 }

@@ -5,7 +5,7 @@ use super::*;
 
 /// Above this many frames the path is drawn from evenly spaced samples: a smooth path loses
 /// nothing visible, and the plot stays fast for timelines of millions of frames.
-pub(super) const MAX_PATH_SAMPLES: u64 = 100_000;
+pub(super) const MAX_PATH_SAMPLES: u64 = crate::warnings::MAX_SAMPLED_FRAMES;
 
 /// A sphere this many times larger than the whole camera motion and view (a floor of radius
 /// 9000, a sky dome) is scenery: its silhouette would fill both panels, so it is drawn like a

@@ -61,16 +61,14 @@ pub fn contact_sheet(
     seq: &Sequence,
     frames: &[u64],
     tile_w: u32,
-) -> Result<(RgbImage, Vec<TileOrigin>), String> {
+) -> Result<(RgbImage, Vec<TileOrigin>), PreviewError> {
     let count = seq.timeline.frame_count;
     if frames.is_empty() {
-        return Err("no frames to put on the contact sheet".into());
+        return Err(PreviewError::NoFrames);
     }
-    if let Some(n) = frames.iter().find(|&&n| n >= count) {
-        return Err(format!(
-            "frame {n} is outside the timeline, which has frames 0-{}",
-            count - 1
-        ));
+    if let Some(&frame) = frames.iter().find(|&&n| n >= count) {
+        let last = count - 1;
+        return Err(PreviewError::OutsideTimeline { frame, last });
     }
     let tile_h = tile_height(seq, tile_w);
     let small = draft(seq, tile_w, tile_h);

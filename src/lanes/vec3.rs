@@ -3,7 +3,7 @@
 //! v · (1 / √(v·v))), so a lane holds exactly what the scalar `DVec3` code held. `a * b` is
 //! the component-wise product, `a * s` and `a / s` scale by one lane value per vector.
 
-use super::lanes::{Lanes, MAX_LANES};
+use super::{Lanes, MAX_LANES};
 use glam::DVec3;
 use std::ops::{Add, Div, Mul, Neg, Sub};
 

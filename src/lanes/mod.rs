@@ -10,11 +10,19 @@
 //!
 //! Comparisons are ordered (false when either side is NaN), like Rust's `<` on f64; `min` and
 //! `max` follow x86 (`if a < b { a } else { b }`), which is only used where no NaN can occur.
+//!
+//! The floor every stage above stands on (the camera's primary rays, the tracer's kernels):
+//! this module uses nothing else of the crate. It is private to the crate (`mod lanes` in
+//! `lib.rs`); its items are `pub` only so that public signatures of the tracer may name them
+//! in bounds, and nothing outside the crate can reach them.
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
+mod vec3;
 #[cfg(target_arch = "x86_64")]
-pub mod x86;
+pub(crate) mod x86;
+
+pub(crate) use vec3::V3;
 
 /// The most lanes a packet has (16 f32 in each of two AVX-512 registers): the size of the
 /// per-lane arrays around the kernels.

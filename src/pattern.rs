@@ -5,6 +5,20 @@
 
 use std::path::PathBuf;
 
+/// The longest file name (one path component) Linux file systems take, in bytes.
+pub const NAME_MAX: usize = 255;
+
+/// Why text is not an output pattern.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum PatternError {
+    #[error("the output pattern is empty")]
+    Empty,
+    #[error(
+        "output pattern `{0}`: the frame number (`#` or `%04d`) must be in the file name, not a directory"
+    )]
+    NumberInDirectory(String),
+}
+
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Pattern {
     prefix: String,
@@ -19,9 +33,9 @@ pub struct Pattern {
 
 impl Pattern {
     /// `last_frame` (the largest frame number) decides the minimum width.
-    pub fn new(pattern: &str, last_frame: u64) -> Result<Pattern, String> {
+    pub fn new(pattern: &str, last_frame: u64) -> Result<Pattern, PatternError> {
         if pattern.trim().is_empty() {
-            return Err("the output pattern is empty".into());
+            return Err(PatternError::Empty);
         }
         let name_start = pattern
             .rfind(['/', std::path::MAIN_SEPARATOR])
@@ -45,9 +59,7 @@ impl Pattern {
                 )
             }
             (Some(_), _) | (None, Some(_)) => {
-                return Err(format!(
-                    "output pattern `{pattern}`: the frame number (`#` or `%04d`) must be in the file name, not a directory"
-                ));
+                return Err(PatternError::NumberInDirectory(pattern.to_string()));
             }
             (None, None) => (pattern, "", 0, true),
         };

@@ -1,0 +1,111 @@
+//! What a frame file is: its format with every option that changes its bytes, what a job
+//! expects the file at a frame path to be, and what is found there. The encoders, the
+//! fingerprint and the resume check all speak of files in these terms.
+
+/// PNG compression level.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum Compression {
+    /// Quick deflate: the default, so encoding never holds back rendering.
+    Fast,
+    /// The png crate's balanced level.
+    Default,
+    /// Smallest files, slowest.
+    Best,
+}
+
+/// The float precision of the R, G, B (and A) channels of EXR files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum ExrPrecision {
+    /// 16-bit half floats.
+    Half,
+    /// 32-bit floats.
+    Float,
+}
+
+/// The file format of the frames, with every option that changes their bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum FileFormat {
+    Png {
+        sixteen_bit: bool,
+        compression: Compression,
+    },
+    Exr {
+        precision: ExrPrecision,
+    },
+}
+
+impl FileFormat {
+    /// From the pattern's extension and the format flags.
+    pub fn for_extension(
+        ext: &str,
+        sixteen_bit: bool,
+        compression: Compression,
+        precision: ExrPrecision,
+    ) -> Result<FileFormat, UnsupportedType> {
+        match ext {
+            "png" => Ok(FileFormat::Png {
+                sixteen_bit,
+                compression,
+            }),
+            "exr" => Ok(FileFormat::Exr { precision }),
+            other => Err(UnsupportedType(other.to_string())),
+        }
+    }
+
+    /// A PNG frame's bit depth, colour type (2: RGB, 6: RGBA) and channels per pixel.
+    pub fn png_layout(&self, alpha: bool) -> (u8, u8, u64) {
+        let depth = match self {
+            FileFormat::Png {
+                sixteen_bit: true, ..
+            } => 16,
+            _ => 8,
+        };
+        if alpha { (depth, 6, 4) } else { (depth, 2, 3) }
+    }
+}
+
+/// A frame file extension rayreel does not write.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unsupported file type `.{0}` (use .png or .exr)")]
+pub struct UnsupportedType(pub String);
+
+/// Why a frame could not be turned into the bytes of a file or of the stream.
+#[derive(Debug, thiserror::Error)]
+pub enum EncodeError {
+    #[error(transparent)]
+    Png(#[from] png::EncodingError),
+    #[error(transparent)]
+    Exr(#[from] exr::error::Error),
+    /// The EXR header as written could not be parsed again to sort its attributes.
+    #[error("the EXR header could not be read back")]
+    ExrHeader,
+}
+
+/// What a frame file of this job must be: its size and format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Expected {
+    pub width: u32,
+    pub height: u32,
+    pub format: FileFormat,
+    /// RGBA PNGs and an A channel in EXR.
+    pub alpha: bool,
+}
+
+/// What is at a frame path before rendering.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Existing {
+    Missing,
+    /// A complete file written by rayreel, with its fingerprint.
+    Ours(String),
+    /// A file with our fingerprint whose image is not what this job would write (another size
+    /// or format, missing or garbage pixels): corrupt if the fingerprint is this frame's,
+    /// stale otherwise.
+    Damaged {
+        fingerprint: String,
+        why: String,
+    },
+    /// A complete image without our fingerprint: someone else's, never overwritten unforced.
+    Foreign,
+    /// Truncated, damaged or not an image at all.
+    Corrupt(String),
+}

@@ -1,0 +1,79 @@
+//! A frame's identity: the file it goes to, its fingerprint and the metadata its file records
+//! (number, time, fps, fingerprint, camera matrices). What a run's frames share is hashed once
+//! (`RunIdentity`); each frame adds its view (`shutter::FrameView`: its pose and its exposure,
+//! built once per frame and handed on), so neither the renderer, the resume check nor the
+//! encoders build a frame's camera again.
+
+use super::fingerprint::{self, Hasher};
+use super::format::FileFormat;
+use crate::pattern::Pattern;
+use crate::sequence::Sequence;
+use crate::shutter::FrameView;
+use std::path::PathBuf;
+
+/// Where frame files go and in which format.
+#[derive(Debug, Clone)]
+pub struct Files {
+    pub pattern: Pattern,
+    pub format: FileFormat,
+}
+
+impl Files {
+    /// The file of frame `n`.
+    pub fn frame_path(&self, n: u64) -> PathBuf {
+        self.pattern.frame_path(n)
+    }
+}
+
+/// What a frame file records about itself.
+#[derive(Debug, Clone)]
+pub struct FrameMeta {
+    pub frame: u64,
+    pub time: f64,
+    pub fps: f64,
+    pub fingerprint: String,
+    /// `worldToCamera` and `worldToNDC` (row-major, row vectors) when the frame has a camera.
+    pub matrices: Option<[glam::DMat4; 2]>,
+}
+
+/// What every frame file of a run shares: the hash of the renderer's version, the scene, the
+/// settings and the file format (`fingerprint::of_run`), the frame rate and the image size.
+#[derive(Clone, Copy)]
+pub struct RunIdentity {
+    run: Hasher,
+    fps: f64,
+    size: (u32, u32),
+}
+
+impl RunIdentity {
+    pub fn new(seq: &Sequence, format: &FileFormat) -> RunIdentity {
+        let s = &seq.settings;
+        RunIdentity {
+            run: fingerprint::of_run(&seq.scene, s, format),
+            fps: seq.timeline.fps,
+            size: (s.width, s.height),
+        }
+    }
+
+    /// The fingerprint of the frame `view` shows: what its file carries, and what the resume
+    /// check compares an existing file with.
+    pub fn fingerprint(&self, view: &FrameView) -> String {
+        fingerprint::of_frame(&self.run, view)
+    }
+
+    /// Everything the file of the frame `view` shows records about it.
+    pub fn meta(&self, view: &FrameView) -> FrameMeta {
+        let (width, height) = self.size;
+        FrameMeta {
+            frame: view.frame,
+            time: view.time,
+            fps: self.fps,
+            fingerprint: self.fingerprint(view),
+            matrices: view
+                .exposure
+                .as_ref()
+                .ok()
+                .map(|e| e.camera.exr_matrices(width, height)),
+        }
+    }
+}
