@@ -48,21 +48,23 @@ const PARALLEL_BELOW: usize = 1 << 14;
 
 impl Bvh {
     pub fn build(mesh: &Mesh) -> Bvh {
+        use rayon::prelude::*;
         let p = &mesh.positions;
-        let mut tris: Vec<Tri> = mesh
-            .triangles
-            .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                let v = t.map(|k| p[k as usize]);
-                Tri {
-                    v,
-                    n: (v[1] - v[0]).cross(v[2] - v[0]),
-                    id: i as u32,
-                }
-            })
+        let tri = |i: usize| {
+            let v = mesh.triangles[i].map(|k| p[k as usize]);
+            Tri {
+                v,
+                n: (v[1] - v[0]).cross(v[2] - v[0]),
+                id: i as u32,
+            }
+        };
+        let prims: Vec<Prim> = (0..mesh.triangles.len())
+            .into_par_iter()
+            .map(|i| Prim::of(&tri(i)))
             .collect();
-        let nodes = subtree(&mut tris, 0);
+        let mut order: Vec<u32> = (0..prims.len() as u32).collect();
+        let nodes = subtree(&mut order, &prims, 0);
+        let tris = order.par_iter().map(|&i| tri(i as usize)).collect();
         Bvh { nodes, tris }
     }
 
@@ -78,16 +80,26 @@ impl Bvh {
     }
 }
 
-fn tri_box(t: &Tri) -> (DVec3, DVec3) {
-    (
-        t.v[0].min(t.v[1]).min(t.v[2]),
-        t.v[0].max(t.v[1]).max(t.v[2]),
-    )
+/// A triangle's box and the centre of that box, computed once for the whole build.
+#[derive(Clone, Copy)]
+struct Prim {
+    lo: DVec3,
+    hi: DVec3,
+    c: DVec3,
 }
 
-fn centre(t: &Tri) -> DVec3 {
-    let (lo, hi) = tri_box(t);
-    (lo + hi) * 0.5
+impl Prim {
+    fn of(t: &Tri) -> Prim {
+        let (lo, hi) = (
+            t.v[0].min(t.v[1]).min(t.v[2]),
+            t.v[0].max(t.v[1]).max(t.v[2]),
+        );
+        Prim {
+            lo,
+            hi,
+            c: (lo + hi) * 0.5,
+        }
+    }
 }
 
 fn padded(min: DVec3, max: DVec3) -> (DVec3, DVec3) {
@@ -95,37 +107,65 @@ fn padded(min: DVec3, max: DVec3) -> (DVec3, DVec3) {
     (min - PAD * reach, max + PAD * reach)
 }
 
-/// The nodes over `tris` (reordered in place), indices relative to this subtree: node 0 is
-/// its root, triangle 0 is `tris[0]`.
-fn subtree(tris: &mut [Tri], depth: usize) -> Vec<Node> {
-    let (mut min, mut max) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    let (mut cmin, mut cmax) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    for t in tris.iter() {
-        let (a, b) = tri_box(t);
-        (min, max) = (min.min(a), max.max(b));
-        let c = centre(t);
-        (cmin, cmax) = (cmin.min(c), cmax.max(c));
+/// Boxes of the triangles and of their centres, over `order` (in parallel when it is long:
+/// minimum and maximum give the same result in any grouping).
+fn extents(order: &[u32], prims: &[Prim]) -> [DVec3; 4] {
+    use rayon::prelude::*;
+    let empty = [
+        DVec3::INFINITY,
+        DVec3::NEG_INFINITY,
+        DVec3::INFINITY,
+        DVec3::NEG_INFINITY,
+    ];
+    let add =
+        |e: [DVec3; 4], p: &Prim| [e[0].min(p.lo), e[1].max(p.hi), e[2].min(p.c), e[3].max(p.c)];
+    let join = |a: [DVec3; 4], b: [DVec3; 4]| {
+        [
+            a[0].min(b[0]),
+            a[1].max(b[1]),
+            a[2].min(b[2]),
+            a[3].max(b[3]),
+        ]
+    };
+    if order.len() < PARALLEL_BELOW {
+        return order.iter().fold(empty, |e, &i| add(e, &prims[i as usize]));
     }
+    order
+        .par_chunks(4096)
+        .map(|c| c.iter().fold(empty, |e, &i| add(e, &prims[i as usize])))
+        .reduce(|| empty, join)
+}
+
+/// The nodes over the triangles `order` lists (reordered in place), indices relative to this
+/// subtree: node 0 is its root, triangle 0 is `order[0]`.
+fn subtree(order: &mut [u32], prims: &[Prim], depth: usize) -> Vec<Node> {
+    let [min, max, cmin, cmax] = extents(order, prims);
     let (min, max) = padded(min, max);
     let leaf = Node {
         min,
         max,
         first: 0,
-        count: tris.len() as u32,
+        count: order.len() as u32,
         axis: 0,
     };
     let chosen = match depth < MAX_DEPTH - 33 {
-        true => split(tris, cmin, cmax, min, max),
-        false => (tris.len() > 1).then_some((0, tris.len() / 2)),
+        true => split(order, prims, cmin, cmax, min, max),
+        false => (order.len() > 1).then_some((0, order.len() / 2)),
     };
     let Some((axis, mid)) = chosen else {
         return vec![leaf];
     };
-    let (left, right) = tris.split_at_mut(mid);
+    let (left, right) = order.split_at_mut(mid);
     let (l, r) = if left.len() + right.len() >= PARALLEL_BELOW {
-        rayon::join(|| subtree(left, depth + 1), || subtree(right, depth + 1))
+        rayon::join(
+            || subtree(left, prims, depth + 1),
+            || subtree(right, prims, depth + 1),
+        )
     } else {
-        (subtree(left, depth + 1), subtree(right, depth + 1))
+        (
+            subtree(left, prims, depth + 1),
+            subtree(right, prims, depth + 1),
+        )
     };
     let mut nodes = Vec::with_capacity(1 + l.len() + r.len());
     nodes.push(Node {
@@ -149,16 +189,17 @@ fn append(nodes: &mut Vec<Node>, sub: Vec<Node>, at: u32, tri: u32) {
     }));
 }
 
-/// Where to split `tris`: the axis, and how many triangles go first (they are moved there).
+/// Where to split `order`: the axis, and how many triangles go first (they are moved there).
 /// None when a leaf is as cheap (and small enough).
 fn split(
-    tris: &mut [Tri],
+    order: &mut [u32],
+    prims: &[Prim],
     cmin: DVec3,
     cmax: DVec3,
     min: DVec3,
     max: DVec3,
 ) -> Option<(usize, usize)> {
-    let n = tris.len();
+    let n = order.len();
     if n <= 2 {
         return None;
     }
@@ -168,7 +209,7 @@ fn split(
         if extent[axis].is_nan() || extent[axis] <= 0.0 {
             continue;
         }
-        if let Some((cost, bin)) = sah(tris, axis, cmin[axis], extent[axis])
+        if let Some((cost, bin)) = sah(order, prims, axis, cmin[axis], extent[axis])
             && best.is_none_or(|b| cost < b.0)
         {
             best = Some((cost, axis, bin));
@@ -178,7 +219,9 @@ fn split(
     match best {
         Some((cost, axis, bin)) if cost < leaf_cost || n > MAX_LEAF => {
             let (start, span) = (cmin[axis], extent[axis]);
-            let mid = partition(tris, |t| bin_of(centre(t)[axis], start, span) <= bin);
+            let mid = partition(order, |i| {
+                bin_of(prims[i as usize].c[axis], start, span) <= bin
+            });
             (mid > 0 && mid < n).then_some((axis, mid))
         }
         None if n > MAX_LEAF => {
@@ -198,15 +241,36 @@ fn area(min: DVec3, max: DVec3) -> f64 {
     d.x * d.y + d.y * d.z + d.z * d.x
 }
 
+type Bins = [(DVec3, DVec3, usize); BINS];
+
 /// The cheapest split after one of the first 15 bins along `axis`, and its cost: the
-/// triangle counts of both sides weighted by their boxes' areas (+1 for the extra node).
-fn sah(tris: &[Tri], axis: usize, start: f64, span: f64) -> Option<(f64, usize)> {
-    let mut bins = [(DVec3::INFINITY, DVec3::NEG_INFINITY, 0usize); BINS];
-    for t in tris {
-        let (lo, hi) = tri_box(t);
-        let b = &mut bins[bin_of(centre(t)[axis], start, span)];
-        *b = (b.0.min(lo), b.1.max(hi), b.2 + 1);
-    }
+/// triangle counts of both sides weighted by their boxes' areas.
+fn sah(order: &[u32], prims: &[Prim], axis: usize, start: f64, span: f64) -> Option<(f64, usize)> {
+    use rayon::prelude::*;
+    let empty: Bins = [(DVec3::INFINITY, DVec3::NEG_INFINITY, 0usize); BINS];
+    let fill = |mut bins: Bins, &i: &u32| {
+        let p = &prims[i as usize];
+        let b = &mut bins[bin_of(p.c[axis], start, span)];
+        *b = (b.0.min(p.lo), b.1.max(p.hi), b.2 + 1);
+        bins
+    };
+    let bins = if order.len() < PARALLEL_BELOW {
+        order.iter().fold(empty, fill)
+    } else {
+        // Boxes and counts merge exactly in any grouping: the same bins on any pool.
+        order
+            .par_chunks(4096)
+            .map(|c| c.iter().fold(empty, fill))
+            .reduce(
+                || empty,
+                |mut a, b| {
+                    for (x, y) in a.iter_mut().zip(b) {
+                        *x = (x.0.min(y.0), x.1.max(y.1), x.2 + y.2);
+                    }
+                    a
+                },
+            )
+    };
     let mut right = [(0.0, 0usize); BINS];
     let (mut lo, mut hi, mut count) = (DVec3::INFINITY, DVec3::NEG_INFINITY, 0);
     for i in (1..BINS).rev() {
@@ -228,13 +292,19 @@ fn sah(tris: &[Tri], axis: usize, start: f64, span: f64) -> Option<(f64, usize)>
     best
 }
 
-/// Moves the triangles `first` accepts to the front, keeping each side's order; returns how many.
-fn partition(tris: &mut [Tri], first: impl Fn(&Tri) -> bool) -> usize {
-    let (a, b): (Vec<Tri>, Vec<Tri>) = tris.iter().partition(|t| first(t));
-    let m = a.len();
-    tris[..m].copy_from_slice(&a);
-    tris[m..].copy_from_slice(&b);
-    m
+/// Moves the entries `first` accepts to the front (in place, two cursors moving inwards);
+/// returns how many.
+fn partition(order: &mut [u32], first: impl Fn(u32) -> bool) -> usize {
+    let (mut i, mut j) = (0, order.len());
+    while i < j {
+        if first(order[i]) {
+            i += 1;
+        } else {
+            j -= 1;
+            order.swap(i, j);
+        }
+    }
+    i
 }
 
 #[cfg(test)]
@@ -286,8 +356,8 @@ mod tests {
             }
             for t in &bvh.tris[n.first as usize..(n.first + n.count) as usize] {
                 seen[t.id as usize] += 1;
-                let (lo, hi) = tri_box(t);
-                assert!(lo.cmpge(n.min).all() && hi.cmple(n.max).all());
+                let p = Prim::of(t);
+                assert!(p.lo.cmpge(n.min).all() && p.hi.cmple(n.max).all());
             }
         }
         assert!(seen.iter().all(|&s| s == 1));
