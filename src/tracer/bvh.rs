@@ -58,13 +58,12 @@ impl Bvh {
                 id: i as u32,
             }
         };
-        let prims: Vec<Prim> = (0..mesh.triangles.len())
+        let mut prims: Vec<Prim> = (0..mesh.triangles.len())
             .into_par_iter()
             .map(|i| Prim::of(&tri(i)))
             .collect();
-        let mut order: Vec<u32> = (0..prims.len() as u32).collect();
-        let nodes = subtree(&mut order, &prims, 0);
-        let tris = order.par_iter().map(|&i| tri(i as usize)).collect();
+        let nodes = subtree(&mut prims, 0);
+        let tris = prims.par_iter().map(|p| tri(p.id as usize)).collect();
         Bvh { nodes, tris }
     }
 
@@ -80,24 +79,25 @@ impl Bvh {
     }
 }
 
-/// A triangle's box and the centre of that box, computed once for the whole build.
+/// A triangle's box, the centre of that box and its index, computed once for the whole build
+/// and moved as the build sorts: every pass over a node's triangles reads memory in order.
 #[derive(Clone, Copy)]
 struct Prim {
     lo: DVec3,
     hi: DVec3,
     c: DVec3,
+    id: u32,
 }
 
 impl Prim {
     fn of(t: &Tri) -> Prim {
-        let (lo, hi) = (
-            t.v[0].min(t.v[1]).min(t.v[2]),
-            t.v[0].max(t.v[1]).max(t.v[2]),
-        );
+        let lo = t.v[0].min(t.v[1]).min(t.v[2]);
+        let hi = t.v[0].max(t.v[1]).max(t.v[2]);
         Prim {
             lo,
             hi,
             c: (lo + hi) * 0.5,
+            id: t.id,
         }
     }
 }
@@ -107,65 +107,67 @@ fn padded(min: DVec3, max: DVec3) -> (DVec3, DVec3) {
     (min - PAD * reach, max + PAD * reach)
 }
 
-/// Boxes of the triangles and of their centres, over `order` (in parallel when it is long:
-/// minimum and maximum give the same result in any grouping).
-fn extents(order: &[u32], prims: &[Prim]) -> [DVec3; 4] {
+/// Folds `prims` into `empty` with `add`, in parallel chunks merged by `join` when there are
+/// many. Only for folds whose result does not depend on the grouping (minima, maxima, counts),
+/// so the tree is the same on any pool.
+fn fold<T: Copy + Send + Sync>(
+    prims: &[Prim],
+    empty: T,
+    add: impl Fn(T, &Prim) -> T + Sync,
+    join: impl Fn(T, T) -> T + Sync,
+) -> T {
     use rayon::prelude::*;
-    let empty = [
-        DVec3::INFINITY,
-        DVec3::NEG_INFINITY,
-        DVec3::INFINITY,
-        DVec3::NEG_INFINITY,
-    ];
-    let add =
-        |e: [DVec3; 4], p: &Prim| [e[0].min(p.lo), e[1].max(p.hi), e[2].min(p.c), e[3].max(p.c)];
-    let join = |a: [DVec3; 4], b: [DVec3; 4]| {
-        [
-            a[0].min(b[0]),
-            a[1].max(b[1]),
-            a[2].min(b[2]),
-            a[3].max(b[3]),
-        ]
-    };
-    if order.len() < PARALLEL_BELOW {
-        return order.iter().fold(empty, |e, &i| add(e, &prims[i as usize]));
+    if prims.len() < PARALLEL_BELOW {
+        return prims.iter().fold(empty, &add);
     }
-    order
+    prims
         .par_chunks(4096)
-        .map(|c| c.iter().fold(empty, |e, &i| add(e, &prims[i as usize])))
-        .reduce(|| empty, join)
+        .map(|c| c.iter().fold(empty, &add))
+        .reduce(|| empty, &join)
 }
 
-/// The nodes over the triangles `order` lists (reordered in place), indices relative to this
-/// subtree: node 0 is its root, triangle 0 is `order[0]`.
-fn subtree(order: &mut [u32], prims: &[Prim], depth: usize) -> Vec<Node> {
-    let [min, max, cmin, cmax] = extents(order, prims);
+/// Boxes of the triangles and of their centres: [min, max, centre min, centre max].
+fn extents(prims: &[Prim]) -> [DVec3; 4] {
+    let (inf, ninf) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    fold(
+        prims,
+        [inf, ninf, inf, ninf],
+        |e, p| [e[0].min(p.lo), e[1].max(p.hi), e[2].min(p.c), e[3].max(p.c)],
+        |a, b| {
+            [
+                a[0].min(b[0]),
+                a[1].max(b[1]),
+                a[2].min(b[2]),
+                a[3].max(b[3]),
+            ]
+        },
+    )
+}
+
+/// The nodes over `prims` (reordered in place), indices relative to this subtree: node 0 is
+/// its root, triangle 0 is `prims[0]`'s.
+fn subtree(prims: &mut [Prim], depth: usize) -> Vec<Node> {
+    let [min, max, cmin, cmax] = extents(prims);
     let (min, max) = padded(min, max);
     let leaf = Node {
         min,
         max,
         first: 0,
-        count: order.len() as u32,
+        count: prims.len() as u32,
         axis: 0,
     };
     let chosen = match depth < MAX_DEPTH - 33 {
-        true => split(order, prims, cmin, cmax, min, max),
-        false => (order.len() > 1).then_some((0, order.len() / 2)),
+        true => split(prims, cmin, cmax, min, max),
+        false => (prims.len() > 1).then_some((0, prims.len() / 2)),
     };
     let Some((axis, mid)) = chosen else {
         return vec![leaf];
     };
-    let (left, right) = order.split_at_mut(mid);
+    let (left, right) = prims.split_at_mut(mid);
     let (l, r) = if left.len() + right.len() >= PARALLEL_BELOW {
-        rayon::join(
-            || subtree(left, prims, depth + 1),
-            || subtree(right, prims, depth + 1),
-        )
+        rayon::join(|| subtree(left, depth + 1), || subtree(right, depth + 1))
     } else {
-        (
-            subtree(left, prims, depth + 1),
-            subtree(right, prims, depth + 1),
-        )
+        (subtree(left, depth + 1), subtree(right, depth + 1))
     };
     let mut nodes = Vec::with_capacity(1 + l.len() + r.len());
     nodes.push(Node {
@@ -189,27 +191,27 @@ fn append(nodes: &mut Vec<Node>, sub: Vec<Node>, at: u32, tri: u32) {
     }));
 }
 
-/// Where to split `order`: the axis, and how many triangles go first (they are moved there).
+/// Where to split `prims`: the axis, and how many triangles go first (they are moved there).
 /// None when a leaf is as cheap (and small enough).
 fn split(
-    order: &mut [u32],
-    prims: &[Prim],
+    prims: &mut [Prim],
     cmin: DVec3,
     cmax: DVec3,
     min: DVec3,
     max: DVec3,
 ) -> Option<(usize, usize)> {
-    let n = order.len();
+    let n = prims.len();
     if n <= 2 {
         return None;
     }
     let extent = cmax - cmin;
+    let bins = binned(prims, cmin, extent);
     let mut best: Option<(f64, usize, usize)> = None;
     for axis in 0..3 {
         if extent[axis].is_nan() || extent[axis] <= 0.0 {
             continue;
         }
-        if let Some((cost, bin)) = sah(order, prims, axis, cmin[axis], extent[axis])
+        if let Some((cost, bin)) = sah(&bins[axis])
             && best.is_none_or(|b| cost < b.0)
         {
             best = Some((cost, axis, bin));
@@ -219,9 +221,7 @@ fn split(
     match best {
         Some((cost, axis, bin)) if cost < leaf_cost || n > MAX_LEAF => {
             let (start, span) = (cmin[axis], extent[axis]);
-            let mid = partition(order, |i| {
-                bin_of(prims[i as usize].c[axis], start, span) <= bin
-            });
+            let mid = partition(prims, |p| bin_of(p.c[axis], start, span) <= bin);
             (mid > 0 && mid < n).then_some((axis, mid))
         }
         None if n > MAX_LEAF => {
@@ -243,34 +243,30 @@ fn area(min: DVec3, max: DVec3) -> f64 {
 
 type Bins = [(DVec3, DVec3, usize); BINS];
 
-/// The cheapest split after one of the first 15 bins along `axis`, and its cost: the
-/// triangle counts of both sides weighted by their boxes' areas.
-fn sah(order: &[u32], prims: &[Prim], axis: usize, start: f64, span: f64) -> Option<(f64, usize)> {
-    use rayon::prelude::*;
-    let empty: Bins = [(DVec3::INFINITY, DVec3::NEG_INFINITY, 0usize); BINS];
-    let fill = |mut bins: Bins, &i: &u32| {
-        let p = &prims[i as usize];
-        let b = &mut bins[bin_of(p.c[axis], start, span)];
-        *b = (b.0.min(p.lo), b.1.max(p.hi), b.2 + 1);
+/// The bins of every axis in one pass over the triangles.
+fn binned(prims: &[Prim], start: DVec3, span: DVec3) -> [Bins; 3] {
+    let empty: [Bins; 3] = [[(DVec3::INFINITY, DVec3::NEG_INFINITY, 0usize); BINS]; 3];
+    let add = |mut bins: [Bins; 3], p: &Prim| {
+        for (axis, axis_bins) in bins.iter_mut().enumerate() {
+            if span[axis] > 0.0 {
+                let b = &mut axis_bins[bin_of(p.c[axis], start[axis], span[axis])];
+                *b = (b.0.min(p.lo), b.1.max(p.hi), b.2 + 1);
+            }
+        }
         bins
     };
-    let bins = if order.len() < PARALLEL_BELOW {
-        order.iter().fold(empty, fill)
-    } else {
-        // Boxes and counts merge exactly in any grouping: the same bins on any pool.
-        order
-            .par_chunks(4096)
-            .map(|c| c.iter().fold(empty, fill))
-            .reduce(
-                || empty,
-                |mut a, b| {
-                    for (x, y) in a.iter_mut().zip(b) {
-                        *x = (x.0.min(y.0), x.1.max(y.1), x.2 + y.2);
-                    }
-                    a
-                },
-            )
+    let join = |mut a: [Bins; 3], b: [Bins; 3]| {
+        for (x, y) in a.iter_mut().flatten().zip(b.iter().flatten()) {
+            *x = (x.0.min(y.0), x.1.max(y.1), x.2 + y.2);
+        }
+        a
     };
+    fold(prims, empty, add, join)
+}
+
+/// The cheapest split after one of the first 15 of an axis's bins, and its cost: the triangle
+/// counts of both sides weighted by their boxes' areas.
+fn sah(bins: &Bins) -> Option<(f64, usize)> {
     let mut right = [(0.0, 0usize); BINS];
     let (mut lo, mut hi, mut count) = (DVec3::INFINITY, DVec3::NEG_INFINITY, 0);
     for i in (1..BINS).rev() {
@@ -292,16 +288,16 @@ fn sah(order: &[u32], prims: &[Prim], axis: usize, start: f64, span: f64) -> Opt
     best
 }
 
-/// Moves the entries `first` accepts to the front (in place, two cursors moving inwards);
+/// Moves the triangles `first` accepts to the front (in place, two cursors moving inwards);
 /// returns how many.
-fn partition(order: &mut [u32], first: impl Fn(u32) -> bool) -> usize {
-    let (mut i, mut j) = (0, order.len());
+fn partition(prims: &mut [Prim], first: impl Fn(&Prim) -> bool) -> usize {
+    let (mut i, mut j) = (0, prims.len());
     while i < j {
-        if first(order[i]) {
+        if first(&prims[i]) {
             i += 1;
         } else {
             j -= 1;
-            order.swap(i, j);
+            prims.swap(i, j);
         }
     }
     i
