@@ -109,6 +109,19 @@ impl Placement {
         (self.rotation * (n / self.scale)).normalize()
     }
 
+    /// The world box of the local box [lo, hi]: its eight corners placed.
+    pub fn placed_box(&self, lo: DVec3, hi: DVec3) -> (DVec3, DVec3) {
+        (0..8).fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), k| {
+            let c = DVec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            );
+            let p = self.point(c);
+            (a.min(p), b.max(p))
+        })
+    }
+
     /// The world → local linear map without the translation: (1/s) ∘ Rᵀ.
     pub fn to_local(&self) -> DMat3 {
         let rt = self.rotation.transpose();
@@ -214,15 +227,7 @@ impl Scene {
     /// The world box of a placed mesh: its file's box with the eight corners placed.
     pub fn mesh_bounds(&self, mesh: usize, place: &Placement) -> (DVec3, DVec3) {
         let (lo, hi) = self.meshes[mesh].bounds();
-        (0..8).fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), k| {
-            let c = DVec3::new(
-                if k & 1 == 0 { lo.x } else { hi.x },
-                if k & 2 == 0 { lo.y } else { hi.y },
-                if k & 4 == 0 { lo.z } else { hi.z },
-            );
-            let p = place.point(c);
-            (a.min(p), b.max(p))
-        })
+        place.placed_box(lo, hi)
     }
 
     /// The scene in coordinates whose origin is `by` (f32 traces relative to the camera):

@@ -62,12 +62,12 @@ pub(super) fn transmittance<V: Lanes>(
     let mut through = V3::splat(DVec3::ONE);
     for c in &world.clear {
         let own = shadow.leaving.eq(V::splat(c.object));
-        let (hit, t) = match c.shape {
-            Shape::Sphere { center, .. } => {
+        let (hit, t) = match (c.shape, &c.mesh) {
+            (Shape::Sphere { center, .. }, _) => {
                 let f = shadow.origin - V3::splat(center);
                 sphere_hit(f, None, V::splat(c.r2), shadow.dir, own, open)
             }
-            Shape::Plane { point, normal } => plane_hit(
+            (Shape::Plane { point, normal }, _) => plane_hit(
                 V3::splat(point),
                 V3::splat(normal),
                 shadow.origin,
@@ -75,15 +75,11 @@ pub(super) fn transmittance<V: Lanes>(
                 own,
                 open,
             ),
-            Shape::Mesh { .. } => {
-                let m = c.mesh.as_ref().expect("a mesh's placement");
-                (m.blocked(shadow, dist, open), dist)
-            }
+            // A mesh answers "crossed before dist" itself; t = 0 passes the test below.
+            (Shape::Mesh { .. }, Some(m)) => (m.blocked(shadow, dist, open), V::splat(0.0)),
+            (Shape::Mesh { .. }, None) => unreachable!("a clear mesh keeps its placement"),
         };
-        let crossed = hit.and(t.lt(dist)).or(match c.shape {
-            Shape::Mesh { .. } => hit,
-            _ => V::M::none_set(),
-        });
+        let crossed = hit.and(t.lt(dist));
         if crossed.any() {
             through = V3::select(crossed, through * V3::splat(c.filter), through);
         }

@@ -43,16 +43,7 @@ pub struct Best<V: Lanes> {
 impl Instance {
     pub fn new(object: usize, bvh: Arc<Bvh>, place: &Placement) -> Instance {
         let (lo, hi) = bvh.bounds();
-        let (mut min, mut max) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        for k in 0..8 {
-            let corner = DVec3::new(
-                if k & 1 == 0 { lo.x } else { hi.x },
-                if k & 2 == 0 { lo.y } else { hi.y },
-                if k & 4 == 0 { lo.z } else { hi.z },
-            );
-            let p = place.point(corner);
-            (min, max) = (min.min(p), max.max(p));
-        }
+        let (min, max) = place.placed_box(lo, hi);
         let reach = min.abs().max(max.abs()).max_element() + (max - min).max_element();
         let pad = reach / (1 << 20) as f64;
         Instance {
