@@ -193,16 +193,24 @@ fn same(a: DVec3, b: DVec3) -> bool {
     bits(a) == bits(b)
 }
 
-#[test]
-fn every_width_traces_every_ray_as_the_scalar_kernel_does() {
+/// The kernels wider than the scalar one this CPU has; None (and a notice) when it has none.
+fn wide_kernels() -> Option<Vec<Kernel>> {
     let wide: Vec<Kernel> = Kernel::ALL
         .into_iter()
         .filter(|k| *k != Kernel::Scalar && k.supported())
         .collect();
     if wide.is_empty() {
         eprintln!("SKIPPED: this CPU has only the scalar kernel");
-        return;
+        return None;
     }
+    Some(wide)
+}
+
+#[test]
+fn every_width_traces_every_ray_as_the_scalar_kernel_does() {
+    let Some(wide) = wide_kernels() else {
+        return;
+    };
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let cases = [(3, 1), (6, 2), (1, 0), (0, 2), (40, 1), (200, 2)];
     let glass = [(4, 1), (2, 2), (1, 0), (30, 1)];
@@ -239,14 +247,9 @@ fn every_width_traces_every_ray_as_the_scalar_kernel_does() {
 /// and at points of shared edges, traced by every width as by the scalar kernel.
 #[test]
 fn every_width_traces_rays_through_meshes_as_the_scalar_kernel_does() {
-    let wide: Vec<Kernel> = Kernel::ALL
-        .into_iter()
-        .filter(|k| *k != Kernel::Scalar && k.supported())
-        .collect();
-    if wide.is_empty() {
-        eprintln!("SKIPPED: this CPU has only the scalar kernel");
+    let Some(wide) = wide_kernels() else {
         return;
-    }
+    };
     let tmp = scratch("kernels-random-mesh");
     let mut rng = Rng(0x2545_f491_4f6c_dd1d);
     let mut soup = String::new();
