@@ -198,13 +198,7 @@ impl<V: Lanes> Visit<V> for NearestVisit<'_, V> {
     fn leaf(&mut self, tris: &[Tri], enter: V::M) {
         let best = &mut *self.best;
         for tri in tris {
-            let v = [
-                V3::splat(tri.v[0]),
-                V3::splat(tri.v[1]),
-                V3::splat(tri.v[2]),
-            ];
-            let (hit, t, w) =
-                triangle_hit(v, V3::splat(tri.n), self.rays.origin, self.rays.dir, enter);
+            let (hit, t, w) = hit(tri, self.rays, enter);
             if !hit.any() {
                 continue;
             }
@@ -250,13 +244,7 @@ impl<V: Lanes> Visit<V> for AnyVisit<'_, V> {
     fn leaf(&mut self, tris: &[Tri], enter: V::M) {
         let mut enter = enter;
         for tri in tris {
-            let v = [
-                V3::splat(tri.v[0]),
-                V3::splat(tri.v[1]),
-                V3::splat(tri.v[2]),
-            ];
-            let (hit, t, _) =
-                triangle_hit(v, V3::splat(tri.n), self.rays.origin, self.rays.dir, enter);
+            let (hit, t, _) = hit(tri, self.rays, enter);
             let b = hit.and(t.lt(self.max_t));
             self.blocked = self.blocked.or(b);
             enter = enter.andnot(b);
@@ -265,6 +253,17 @@ impl<V: Lanes> Visit<V> for AnyVisit<'_, V> {
             }
         }
     }
+}
+
+/// `triangle_hit` of one stored triangle for the packet in mesh coordinates.
+#[inline(always)]
+fn hit<V: Lanes>(tri: &Tri, rays: &Rays<V>, enter: V::M) -> (V::M, V, [V; 3]) {
+    let v = [
+        V3::splat(tri.v[0]),
+        V3::splat(tri.v[1]),
+        V3::splat(tri.v[2]),
+    ];
+    triangle_hit(v, V3::splat(tri.n), rays.origin, rays.dir, enter)
 }
 
 /// The lanes of `tie` (same t as the best so far) where triangle `id` of `object` comes first:
