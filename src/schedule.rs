@@ -22,29 +22,29 @@ use std::time::{Duration, Instant};
 /// One frame of a run: its number, and whether its file must be written (with a stream, frames
 /// whose files are up to date are still rendered for the stream but not rewritten).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Task {
-    pub frame: u64,
-    pub write_file: bool,
+pub(crate) struct Task {
+    pub(crate) frame: u64,
+    pub(crate) write_file: bool,
 }
 
 /// What a run renders and where it goes: the frames (tasks), the file sink, the stream, the
 /// threads and, when processes cooperate, their claims.
-pub struct Batch {
-    pub sequence: Arc<Sequence>,
+pub(crate) struct Batch {
+    pub(crate) sequence: Arc<Sequence>,
     /// Ascending frame numbers, each inside the timeline.
-    pub tasks: Vec<Task>,
-    pub files: Option<Files>,
-    pub stream: Option<(StreamFormat, bool)>,
+    pub(crate) tasks: Vec<Task>,
+    pub(crate) files: Option<Files>,
+    pub(crate) stream: Option<(StreamFormat, bool)>,
     /// Where the stream goes: stdout for users, a sink for benchmarks.
-    pub stream_out: Option<Box<dyn Write + Send>>,
-    pub threads: usize,
+    pub(crate) stream_out: Option<Box<dyn Write + Send>>,
+    pub(crate) threads: usize,
     /// Cooperate with other processes through claim files (files only, no stream).
-    pub claims: Option<Arc<Claims>>,
+    pub(crate) claims: Option<Arc<Claims>>,
 }
 
 /// How a run ended when nothing failed.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Outcome {
+pub(crate) enum Outcome {
     /// Every task done, except `held`: frames another live process has claimed.
     Complete { written: usize, held: Vec<u64> },
     /// Ctrl-C or SIGTERM: frames in flight were cancelled, nothing new was started; frames
@@ -127,12 +127,12 @@ const TICK: Duration = Duration::from_millis(100);
 /// so this only matters while one is being encoded) before it leaves them behind.
 const STOP_GRACE: Duration = Duration::from_secs(2);
 
-pub fn run(batch: Batch, progress: &mut Progress) -> Result<Outcome, RunError> {
+pub(crate) fn run(batch: Batch, progress: &mut Progress) -> Result<Outcome, RunError> {
     run_on(&worker_pool(batch.threads)?, batch, progress)
 }
 
 /// The worker threads of a run; an error when the machine cannot start that many.
-pub fn worker_pool(threads: usize) -> Result<rayon::ThreadPool, RunError> {
+pub(crate) fn worker_pool(threads: usize) -> Result<rayon::ThreadPool, RunError> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .thread_name(|i| format!("rayreel-{i}"))
@@ -141,7 +141,7 @@ pub fn worker_pool(threads: usize) -> Result<rayon::ThreadPool, RunError> {
 }
 
 /// `run` on threads already started (claim mode runs several passes on them).
-pub fn run_on(
+pub(crate) fn run_on(
     pool: &rayon::ThreadPool,
     mut batch: Batch,
     progress: &mut Progress,
@@ -382,7 +382,7 @@ pub fn render_frame(seq: &Sequence, n: u64) -> Result<Frame, RunError> {
 }
 
 /// Renders frame `n` in `world` (built once from the sequence's scene) with `settings`.
-pub fn render_with(
+pub(crate) fn render_with(
     world: &World,
     seq: &Sequence,
     n: u64,

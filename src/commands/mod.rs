@@ -134,14 +134,14 @@ fn check(args: CheckArgs) -> Result<(), Error> {
 }
 
 /// Jobs above this many rays are called enormous: about 9 hours at `RAYS_PER_SECOND`.
-pub const ENORMOUS_RAYS: f64 = 1e12;
+pub(crate) const ENORMOUS_RAYS: f64 = 1e12;
 /// Rays a second of the 2-core machine measured under Performance in the README.
 const RAYS_PER_SECOND: f64 = 3e7;
 
 /// An upper bound on the rays one frame traces: pixels × samples (adaptive: its maximum) ×
 /// (1 + lights that cast shadows) × max_depth, since each surface a path visits sends one ray
 /// on and at most one shadow ray per light.
-pub fn rays_per_frame(seq: &Sequence) -> f64 {
+pub(crate) fn rays_per_frame(seq: &Sequence) -> f64 {
     let s = &seq.settings;
     let samples = s.adaptive.map_or(s.samples, |a| a.max_samples);
     let shadows = seq
@@ -190,7 +190,7 @@ fn duration(seconds: f64) -> String {
 }
 
 /// The one-screen description `rayreel check` prints.
-pub fn summary(file: &str, seq: &Sequence) -> String {
+pub(crate) fn summary(file: &str, seq: &Sequence) -> String {
     let scene = &seq.scene;
     let spheres = scene
         .objects

@@ -25,7 +25,7 @@ fn prepare(files: &Files, frames: &FrameSet) -> Result<(), Error> {
     Ok(())
 }
 
-pub fn render(args: RenderArgs) -> Result<(), Error> {
+pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     // From here on every line on stderr is one JSON object, errors included.
     crate::console::set_json(args.progress == ProgressFormat::Json);
     let spec = Job::new(&args.job)?;
@@ -430,7 +430,7 @@ pub(crate) fn plural(n: u64, noun: &str) -> String {
 
 /// `rayreel status`: the completeness of the output against the sequence; exit 0 only when
 /// every selected frame is up to date.
-pub fn status(args: RenderArgs) -> Result<(), Error> {
+pub(crate) fn status(args: RenderArgs) -> Result<(), Error> {
     let spec = Job::for_status(&args.job)?;
     let files = spec.files(&args.job)?;
     let (seq, frames) = (spec.seq, spec.frames);

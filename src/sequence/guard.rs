@@ -27,7 +27,7 @@ pub fn nesting_depth(text: &str) -> (usize, usize, usize) {
 
 /// Line and column (1-based) of the first point where the bound of `nesting_depth` passes
 /// `limit`.
-pub fn first_too_deep(text: &str, limit: usize) -> Option<(usize, usize)> {
+pub(crate) fn first_too_deep(text: &str, limit: usize) -> Option<(usize, usize)> {
     let mut s = Scanner::new(text, limit);
     s.run();
     (s.max > limit).then_some(s.max_at)

@@ -79,10 +79,10 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
 }
 
 /// Largest |render.exposure|, in stops: 2^64 times the brightest colour still fits an f32.
-pub const MAX_EXPOSURE: f64 = 64.0;
+pub(crate) const MAX_EXPOSURE: f64 = 64.0;
 
 /// An exposure in stops, as the file and `--exposure` may give it.
-pub fn exposure(v: f64) -> Result<f64, String> {
+pub(crate) fn exposure(v: f64) -> Result<f64, String> {
     if v.is_finite() && v.abs() <= MAX_EXPOSURE {
         Ok(v)
     } else {
@@ -134,10 +134,10 @@ pub const DEFAULT_THRESHOLD: f64 = 0.03;
 pub const DEFAULT_MAX_SAMPLES: u64 = 32;
 
 /// Largest samples per pixel accepted.
-pub const MAX_SAMPLES: u64 = 4096;
+pub(crate) const MAX_SAMPLES: u64 = 4096;
 
 /// What a quality preset sets; explicit settings at the same or a later level override it.
-pub fn preset(s: &mut Settings, q: Quality) {
+pub(crate) fn preset(s: &mut Settings, q: Quality) {
     let (samples, adaptive, depth) = match q {
         Quality::Draft => (1, None, 2),
         Quality::Preview => (4, None, 3),
@@ -264,7 +264,7 @@ pub(super) fn contained(path: &str, output: &str) -> Check<()> {
 /// Where the directory of a relative `output` really is when it is not below the current
 /// directory (a symbolic link on the way leads elsewhere, or leads nowhere); `None` when it is
 /// inside. The part that does not exist yet will be created as plain directories.
-pub fn escapes(output: &str) -> Option<PathBuf> {
+pub(crate) fn escapes(output: &str) -> Option<PathBuf> {
     let cwd = std::fs::canonicalize(".").ok()?;
     let mut existing = Path::new(output).parent().unwrap_or(Path::new(""));
     let mut missing = Vec::new();

@@ -25,7 +25,7 @@ const TALK_POV: &str = include_str!("../../../sequences/bench/talk_orbit.pov");
 
 /// Why a benchmark could not run.
 #[derive(Debug, thiserror::Error)]
-pub enum BenchError {
+pub(crate) enum BenchError {
     #[error(transparent)]
     Load(#[from] LoadError),
     #[error(transparent)]
@@ -48,10 +48,10 @@ pub enum BenchError {
 
 /// Median, min and max of some seconds.
 #[derive(Debug, Clone, Copy)]
-pub struct Spread {
-    pub median: f64,
-    pub min: f64,
-    pub max: f64,
+pub(crate) struct Spread {
+    pub(crate) median: f64,
+    pub(crate) min: f64,
+    pub(crate) max: f64,
 }
 
 fn timing(mut t: Vec<f64>) -> Spread {
@@ -176,7 +176,7 @@ fn sequence_run(
 }
 
 /// A field of `n` spheres on a plane, under one light, seen from above at an angle.
-pub fn field(n: usize) -> String {
+pub(crate) fn field(n: usize) -> String {
     let side = (n as f64).sqrt().ceil() as usize;
     let spacing = 20.0 / side as f64;
     let mut s = String::from(
@@ -202,15 +202,15 @@ pub fn field(n: usize) -> String {
     s
 }
 
-pub struct Options {
-    pub runs: usize,
-    pub only: Option<String>,
+pub(crate) struct Options {
+    pub(crate) runs: usize,
+    pub(crate) only: Option<String>,
     /// Smaller sizes and fields, for tests of the command itself.
-    pub quick: bool,
+    pub(crate) quick: bool,
 }
 
 /// Runs the benchmarks, printing lines as they finish.
-pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), BenchError> {
+pub(crate) fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), BenchError> {
     let want = |name: &str| o.only.as_deref().is_none_or(|w| w == name);
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let (w, h) = if o.quick { (320, 180) } else { (1920, 1080) };

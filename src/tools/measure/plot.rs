@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 impl Report {
     /// Error against time, log-log, uniform and adaptive as lines, presets labelled, the
     /// precision rows as two diamonds.
-    pub fn svg(&self) -> String {
+    pub(crate) fn svg(&self) -> String {
         let (w, h, m) = (720.0, 460.0, 60.0);
         let pts: Vec<(f64, f64)> = self
             .rows
