@@ -238,6 +238,32 @@ pub(crate) fn parse_drawable(
 /// The sequence, and the first key or frame whose camera cannot be built (see `load_drawable`).
 fn validate(raw: raw::Sequence, name: &str) -> Check<(Sequence, Option<Invalid>)> {
     let settings = render_settings(&raw.render)?;
+    let scene = scene_of(&raw)?;
+    let camera = raw.camera.as_ref().map(camera_key).transpose()?;
+    let loaded = match (&raw.timeline, camera) {
+        (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
+        (None, Some(key)) => timeline::Loaded {
+            timeline: Timeline::still(key),
+            warnings: Vec::new(),
+            problem: None,
+        },
+        (None, None) => return invalid("camera", "a sequence needs a `camera:` or a `timeline:`"),
+    };
+    let timeline = loaded.timeline;
+    let seq = Sequence {
+        name: name.to_string(),
+        scene,
+        settings,
+        output: output_of(raw.output, name, &timeline)?,
+        quality: raw.render.quality,
+        timeline,
+        warnings: loaded.warnings,
+    };
+    Ok((seq, loaded.problem))
+}
+
+/// The background, materials, objects and lights, checked in that order.
+fn scene_of(raw: &raw::Sequence) -> Check<Scene> {
     let background = color(
         "render.background",
         raw.render.background.unwrap_or_default(),
@@ -264,49 +290,33 @@ fn validate(raw: raw::Sequence, name: &str) -> Check<(Sequence, Option<Invalid>)
     for (i, l) in raw.lights.iter().enumerate() {
         lights.push(light(&format!("lights[{i}]"), l)?);
     }
-    let camera = raw.camera.as_ref().map(camera_key).transpose()?;
-    let loaded = match (&raw.timeline, camera) {
-        (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
-        (None, Some(key)) => timeline::Loaded {
-            timeline: Timeline::still(key),
-            warnings: Vec::new(),
-            problem: None,
-        },
-        (None, None) => return invalid("camera", "a sequence needs a `camera:` or a `timeline:`"),
+    Ok(Scene {
+        objects,
+        materials,
+        lights,
+        background,
+    })
+}
+
+/// `output:` checked against the timeline (a one-file name holds one frame), or the default
+/// `frames/NAME/frame_####.png`.
+fn output_of(output: Option<String>, name: &str, timeline: &Timeline) -> Check<String> {
+    let Some(o) = output else {
+        return Ok(format!("frames/{name}/frame_####.png"));
     };
-    let timeline = loaded.timeline;
-    let seq = Sequence {
-        name: name.to_string(),
-        scene: Scene {
-            objects,
-            materials,
-            lights,
-            background,
-        },
-        settings,
-        output: match raw.output {
-            Some(o) => {
-                let pattern = output_pattern(&o, timeline.last_frame());
-                let pattern = pattern.or_else(|m| invalid("output", m))?;
-                if pattern.is_single() && timeline.frame_count > 1 {
-                    return invalid(
-                        "output",
-                        format!(
-                            "output pattern `{o}` has no `#` run for the frame number, but the sequence has {} frames (e.g. frame_####.png)",
-                            timeline.frame_count
-                        ),
-                    );
-                }
-                contained("output", &o)?;
-                o
-            }
-            None => format!("frames/{name}/frame_####.png"),
-        },
-        quality: raw.render.quality,
-        timeline,
-        warnings: loaded.warnings,
-    };
-    Ok((seq, loaded.problem))
+    let pattern = output_pattern(&o, timeline.last_frame());
+    let pattern = pattern.or_else(|m| invalid("output", m))?;
+    if pattern.is_single() && timeline.frame_count > 1 {
+        return invalid(
+            "output",
+            format!(
+                "output pattern `{o}` has no `#` run for the frame number, but the sequence has {} frames (e.g. frame_####.png)",
+                timeline.frame_count
+            ),
+        );
+    }
+    contained("output", &o)?;
+    Ok(o)
 }
 
 /// `camera:` as a key at time 0: a still camera, or what the first keyframe starts from.

@@ -40,28 +40,7 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
         s.samples = check("render.samples", samples(n))?;
     }
     if let Some(a) = &r.adaptive {
-        let threshold = a.threshold.unwrap_or(DEFAULT_THRESHOLD);
-        in_range(
-            "render.adaptive.threshold",
-            threshold,
-            0.0,
-            1.0,
-            "in (0, 1]",
-        )?;
-        if threshold == 0.0 {
-            return invalid(
-                "render.adaptive.threshold",
-                "must be greater than 0 (got 0)",
-            );
-        }
-        let max_samples = check(
-            "render.adaptive.max_samples",
-            samples(a.max_samples.unwrap_or(DEFAULT_MAX_SAMPLES)),
-        )?;
-        s.adaptive = Some(Adaptive {
-            threshold: threshold as f32,
-            max_samples,
-        });
+        s.adaptive = Some(adaptive(a)?);
     }
     if let Some(a) = s.adaptive
         && a.max_samples <= s.samples
@@ -76,6 +55,30 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
         );
     }
     Ok(s)
+}
+
+/// `render.adaptive`: its threshold in (0, 1] and its most samples, or their defaults.
+fn adaptive(a: &raw::Adaptive) -> Check<Adaptive> {
+    let threshold = a.threshold.unwrap_or(DEFAULT_THRESHOLD);
+    in_range(
+        "render.adaptive.threshold",
+        threshold,
+        0.0,
+        1.0,
+        "in (0, 1]",
+    )?;
+    if threshold == 0.0 {
+        return invalid(
+            "render.adaptive.threshold",
+            "must be greater than 0 (got 0)",
+        );
+    }
+    let max_samples = samples(a.max_samples.unwrap_or(DEFAULT_MAX_SAMPLES))
+        .or_else(|m| invalid("render.adaptive.max_samples", m))?;
+    Ok(Adaptive {
+        threshold: threshold as f32,
+        max_samples,
+    })
 }
 
 /// Largest |render.exposure|, in stops: 2^64 times the brightest colour still fits an f32.
