@@ -3,7 +3,7 @@
 //! (clap has already checked each of them), the frame spec and shard become this task's
 //! frames, and the output pattern and format become the file sink.
 
-use super::{BitDepth, JobArgs, ShardSpec, resolve_shard};
+use super::{BitDepth, JobArgs, RenderArgs, ShardSpec, resolve_shard};
 use crate::frameset::FrameSet;
 use crate::output::{FileFormat, Files};
 use crate::sequence::{self, LoadError, Quality, Sequence, output_pattern, preset};
@@ -89,6 +89,23 @@ impl Job {
             )));
         }
         Ok(Files { pattern, format })
+    }
+
+    /// The file sink of a render: with `--pipe` the stream is the product, and files are
+    /// written too only when `--output` asks for them; `--claim` shares files, so it takes
+    /// no stream.
+    pub(crate) fn render_files(&self, args: &RenderArgs) -> Result<Option<Files>, JobError> {
+        let files = match args.pipe.is_none() || self.output_given {
+            true => Some(self.files(&args.job)?),
+            false => None,
+        };
+        if args.claim && (files.is_none() || args.pipe.is_some()) {
+            return Err(JobError::Usage(
+                "--claim shares frame files between processes; it cannot be combined with --pipe"
+                    .into(),
+            ));
+        }
+        Ok(files)
     }
 }
 
