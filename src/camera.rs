@@ -36,9 +36,9 @@ pub enum Degenerate {
 /// A thin lens: its aperture (diameter) and the distance from the camera to the plane in
 /// focus, both in scene units. Aperture 0 is a pinhole, for which the focus does not matter.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Lens {
-    pub aperture: f64,
-    pub focus_distance: f64,
+pub(crate) struct Lens {
+    pub(crate) aperture: f64,
+    pub(crate) focus_distance: f64,
 }
 
 /// An orthonormal camera frame, ready to make rays.
@@ -46,12 +46,12 @@ pub struct Lens {
 pub struct Camera {
     pub origin: DVec3,
     pub forward: DVec3,
-    pub right: DVec3,
-    pub up: DVec3,
-    pub tan_half_fov: f64,
+    pub(crate) right: DVec3,
+    pub(crate) up: DVec3,
+    pub(crate) tan_half_fov: f64,
     /// Half the aperture (0: a pinhole) and the focus distance along `forward`.
-    pub lens_radius: f64,
-    pub focus_distance: f64,
+    pub(crate) lens_radius: f64,
+    pub(crate) focus_distance: f64,
 }
 
 /// Below this sine of the angle between up and the view direction the roll is numerically
@@ -89,7 +89,7 @@ impl Camera {
     }
 
     /// This camera seen through `lens`.
-    pub fn with_lens(self, lens: Lens) -> Camera {
+    pub(crate) fn with_lens(self, lens: Lens) -> Camera {
         Camera {
             lens_radius: 0.5 * lens.aperture,
             focus_distance: lens.focus_distance,
@@ -113,7 +113,7 @@ impl Camera {
 
     /// `direction` for N screen points at once, lane by lane the same arithmetic.
     #[inline(always)]
-    pub fn directions<V: Lanes>(&self, x: V, y: V) -> V3<V> {
+    pub(crate) fn directions<V: Lanes>(&self, x: V, y: V) -> V3<V> {
         let s = V::splat(self.tan_half_fov);
         let (x, y) = (x * s, y * s);
         (V3::splat(self.forward) + V3::splat(self.right) * x + V3::splat(self.up) * y).normalize()
@@ -123,7 +123,7 @@ impl Camera {
     /// vectors (p′ = p·M, translation in the last row). Camera space is OpenEXR's (RenderMan's):
     /// left-handed, x right, y up, z along the view; NDC has (0, 0) at the top left corner of
     /// the image and (1, 1) at the bottom right, after dividing by w = camera z.
-    pub fn exr_matrices(&self, width: u32, height: u32) -> [DMat4; 2] {
+    pub(crate) fn exr_matrices(&self, width: u32, height: u32) -> [DMat4; 2] {
         let (r, u, f, o) = (self.right, self.up, self.forward, self.origin);
         let world_to_camera = DMat4::from_cols_array_2d(&[
             [r.x, u.x, f.x, 0.0],
@@ -159,7 +159,14 @@ pub fn screen_point(row: u32, col: u32, u: f64, v: f64, width: u32, height: u32)
 
 /// `screen_point` for N points at once (rows, columns and offsets per lane).
 #[inline(always)]
-pub fn screen_points<V: Lanes>(row: V, col: V, u: V, v: V, width: u32, height: u32) -> (V, V) {
+pub(crate) fn screen_points<V: Lanes>(
+    row: V,
+    col: V,
+    u: V,
+    v: V,
+    width: u32,
+    height: u32,
+) -> (V, V) {
     let w = V::splat(f64::from(width));
     let h = V::splat(f64::from(height));
     let (one, two) = (V::splat(1.0), V::splat(2.0));

@@ -17,14 +17,14 @@ use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, SystemTime};
 
-pub struct Claims {
+pub(crate) struct Claims {
     timeout: Duration,
     owner: String,
 }
 
 /// What happened when trying to claim a frame.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Attempt {
+pub(crate) enum Attempt {
     Claimed,
     /// Another live process holds it (its owner line).
     Held(String),
@@ -69,7 +69,7 @@ fn differs<T: PartialEq>(recorded: &Option<T>, now: Option<T>) -> bool {
 }
 
 /// When process `pid` started, in clock ticks since boot (field 22 of /proc/PID/stat).
-pub fn start_time(pid: i32) -> Option<u64> {
+pub(crate) fn start_time(pid: i32) -> Option<u64> {
     let stat = fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
     // The command name (field 2) is in parentheses and may hold spaces and parentheses.
     let after_name = &stat[stat.rfind(')')? + 1..];
@@ -77,13 +77,13 @@ pub fn start_time(pid: i32) -> Option<u64> {
 }
 
 /// This boot of the kernel (containers share their host's).
-pub fn boot_id() -> Option<String> {
+pub(crate) fn boot_id() -> Option<String> {
     let id = fs::read_to_string("/proc/sys/kernel/random/boot_id").ok()?;
     Some(id.trim().to_string()).filter(|id| !id.is_empty())
 }
 
 impl Claims {
-    pub fn new(timeout: Duration) -> Claims {
+    pub(crate) fn new(timeout: Duration) -> Claims {
         let pid = std::process::id();
         let field = |name: &str, v: Option<String>| v.map(|v| format!(" {name}={v}"));
         Claims {
@@ -98,13 +98,13 @@ impl Claims {
     }
 
     /// `.NAME.rayreel-claim` beside the frame (a hash for NAME when the name is too long).
-    pub fn path(frame: &Path) -> PathBuf {
+    pub(crate) fn path(frame: &Path) -> PathBuf {
         const SUFFIX: &str = ".rayreel-claim";
         sidecar(frame, SUFFIX, 1 + SUFFIX.len())
     }
 
     /// Claims the frame file `frame`, taking over a stale claim.
-    pub fn try_claim(&self, frame: &Path) -> std::io::Result<Attempt> {
+    pub(crate) fn try_claim(&self, frame: &Path) -> std::io::Result<Attempt> {
         let path = Claims::path(frame);
         for _ in 0..2 {
             match OpenOptions::new().write(true).create_new(true).open(&path) {
@@ -139,7 +139,7 @@ impl Claims {
     }
 
     /// Shows the owner is alive: refreshes the claim's modification time.
-    pub fn heartbeat(&self, frame: &Path) {
+    pub(crate) fn heartbeat(&self, frame: &Path) {
         let path = Claims::path(frame);
         // Never through a link someone put in the claim's place.
         let opened = OpenOptions::new()
@@ -151,7 +151,7 @@ impl Claims {
         }
     }
 
-    pub fn release(&self, frame: &Path) {
+    pub(crate) fn release(&self, frame: &Path) {
         let path = Claims::path(frame);
         if fs::read_to_string(&path).is_ok_and(|h| h.trim() == self.owner) {
             let _ = fs::remove_file(path);
@@ -159,7 +159,7 @@ impl Claims {
     }
 
     /// How often in-flight claims are refreshed.
-    pub fn heartbeat_every(&self) -> Duration {
+    pub(crate) fn heartbeat_every(&self) -> Duration {
         self.timeout / 4
     }
 }
@@ -176,16 +176,16 @@ fn heartbeat_age(path: &Path) -> Option<Duration> {
 
 /// A claim another process holds, as a waiting process reports it.
 #[derive(Debug, Clone)]
-pub struct Held {
-    pub path: PathBuf,
+pub(crate) struct Held {
+    pub(crate) path: PathBuf,
     /// Its owner line: host, pid, start time, boot id.
-    pub owner: String,
+    pub(crate) owner: String,
     /// How long ago it was refreshed; `None` once it is gone.
-    pub heartbeat: Option<Duration>,
+    pub(crate) heartbeat: Option<Duration>,
 }
 
 /// The claim on `frame` as it is now.
-pub fn held(frame: &Path) -> Held {
+pub(crate) fn held(frame: &Path) -> Held {
     let path = Claims::path(frame);
     Held {
         owner: fs::read_to_string(&path)

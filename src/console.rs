@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 /// Set by `--progress json`: every line on stderr is then one JSON object.
 static JSON: AtomicBool = AtomicBool::new(false);
 
-pub fn set_json(on: bool) {
+pub(crate) fn set_json(on: bool) {
     JSON.store(on, Ordering::Relaxed);
 }
 
@@ -25,12 +25,12 @@ pub fn error_line(message: &str, exit_code: u8) -> String {
 }
 
 /// A line on stderr that is not about one frame: as it is, or as a JSON `note` event.
-pub fn note(text: &str) {
+pub(crate) fn note(text: &str) {
     line("note", text);
 }
 
 /// A warning on stderr: as it is, or as a JSON `warning` event.
-pub fn warning(text: &str) {
+pub(crate) fn warning(text: &str) {
     line("warning", text);
 }
 
@@ -43,7 +43,7 @@ fn line(event: &str, text: &str) {
 
 /// Writes `text` to stdout. A reader that has gone (`rayreel status FILE | head -1`) ends the
 /// output normally, as in ripgrep; any other failure is an error.
-pub fn print(text: &str) -> Result<(), String> {
+pub(crate) fn print(text: &str) -> Result<(), String> {
     let mut out = std::io::stdout().lock();
     match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
         Err(e) if e.kind() != ErrorKind::BrokenPipe => Err(format!("stdout: cannot write: {e}")),
@@ -54,7 +54,7 @@ pub fn print(text: &str) -> Result<(), String> {
 /// `s` with control characters, and the bidirectional overrides that reorder what a terminal
 /// shows, written as escapes (`\u{1b}`, `\n`): a name from a sequence file cannot move the
 /// cursor, recolour the terminal or forge a line of output.
-pub fn printable(s: &str) -> Cow<'_, str> {
+pub(crate) fn printable(s: &str) -> Cow<'_, str> {
     if !s.chars().any(hostile) {
         return Cow::Borrowed(s);
     }
@@ -79,7 +79,7 @@ fn hostile(c: char) -> bool {
 }
 
 /// A JSON string literal.
-pub fn quote(s: &str) -> String {
+pub(crate) fn quote(s: &str) -> String {
     let mut out = String::with_capacity(s.len() + 2);
     out.push('"');
     for c in s.chars() {

@@ -14,9 +14,9 @@ pub struct Frame {
     pub depth: Option<Vec<f32>>,
     /// Coverage (alpha) when asked for: then `rgb` is premultiplied, eye rays that miss
     /// having added nothing.
-    pub alpha: Option<Vec<f32>>,
+    pub(crate) alpha: Option<Vec<f32>>,
     /// How integer values encode the colour.
-    pub encoding: Encoding,
+    pub(crate) encoding: Encoding,
     /// Colour values the tracer produced as NaN or beyond f32 and that were replaced before
     /// storing; the test suite asserts this stays 0 on every extreme scene.
     pub non_finite: u64,
@@ -32,18 +32,13 @@ impl Frame {
         [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
     }
 
-    /// Channels of the integer pixels: RGB, or RGBA with alpha.
-    pub fn channels(&self) -> usize {
-        if self.alpha.is_some() { 4 } else { 3 }
-    }
-
     /// 8-bit RGB(A) in the frame's encoding (see `levels`).
     pub fn to_rgb8(&self) -> Vec<u8> {
         self.levels(255.0)
     }
 
     /// 16-bit RGB(A) in the frame's encoding.
-    pub fn to_rgb16(&self) -> Vec<u16> {
+    pub(crate) fn to_rgb16(&self) -> Vec<u16> {
         self.levels(65535.0)
     }
 
@@ -70,7 +65,7 @@ impl Frame {
 
     /// Gives the frame's buffers back for the next frame of the same size: a 1080p frame is
     /// 25 MB, and every fresh page of it costs a page fault.
-    pub fn recycle(self) {
+    pub(crate) fn recycle(self) {
         let mut spare = SPARE.lock().unwrap_or_else(|e| e.into_inner());
         for buffer in std::iter::once(self.rgb)
             .chain(self.depth)
@@ -89,7 +84,7 @@ static SPARE: std::sync::Mutex<Vec<Vec<f32>>> = std::sync::Mutex::new(Vec::new()
 
 /// A buffer of `len` floats, recycled when one of that length is spare. Its contents are
 /// whatever the last frame left: the tracer writes every value before anything reads it.
-pub fn buffer(len: usize) -> Vec<f32> {
+pub(crate) fn buffer(len: usize) -> Vec<f32> {
     let mut spare = SPARE.lock().unwrap_or_else(|e| e.into_inner());
     match spare.iter().position(|b| b.len() == len) {
         Some(i) => spare.swap_remove(i),

@@ -7,15 +7,15 @@ use std::fmt;
 
 /// Frames `first`, `first + step`, …: `count` of them (count ≥ 1, step ≥ 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Run {
-    pub first: u64,
-    pub count: u64,
-    pub step: u64,
+pub(crate) struct Run {
+    pub(crate) first: u64,
+    pub(crate) count: u64,
+    pub(crate) step: u64,
 }
 
 impl Run {
     /// `first..=last` every `step` (first ≤ last, step ≥ 1).
-    pub fn new(first: u64, last: u64, step: u64) -> Run {
+    pub(crate) fn new(first: u64, last: u64, step: u64) -> Run {
         Run {
             first,
             count: (last - first) / step + 1,
@@ -23,7 +23,7 @@ impl Run {
         }
     }
 
-    pub fn last(&self) -> u64 {
+    pub(crate) fn last(&self) -> u64 {
         self.nth(self.count - 1)
     }
 
@@ -51,19 +51,19 @@ pub struct FrameSet {
 }
 
 impl FrameSet {
-    pub fn new() -> FrameSet {
+    pub(crate) fn new() -> FrameSet {
         FrameSet::default()
     }
 
     /// `first..=last` every `step`.
-    pub fn range(first: u64, last: u64, step: u64) -> FrameSet {
+    pub(crate) fn range(first: u64, last: u64, step: u64) -> FrameSet {
         FrameSet::from_runs(vec![Run::new(first, last, step)])
     }
 
     /// The union of any runs, overlapping or not. Runs that repeat, contain or extend one
     /// another are joined as runs; only runs whose frames interleave (`0-9:2` with `1-9:2`)
     /// are merged frame by frame, which costs their span.
-    pub fn from_runs(mut runs: Vec<Run>) -> FrameSet {
+    pub(crate) fn from_runs(mut runs: Vec<Run>) -> FrameSet {
         runs.sort_by_key(|r| (r.first, std::cmp::Reverse(r.count)));
         let mut kept: Vec<Run> = Vec::with_capacity(runs.len());
         for r in runs {
@@ -93,33 +93,34 @@ impl FrameSet {
     }
 
     /// The union of several sets.
-    pub fn union(sets: &[&FrameSet]) -> FrameSet {
+    pub(crate) fn union(sets: &[&FrameSet]) -> FrameSet {
         FrameSet::from_runs(sets.iter().flat_map(|s| s.runs.iter().copied()).collect())
     }
 
-    pub fn len(&self) -> u64 {
+    pub(crate) fn len(&self) -> u64 {
         self.len
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.len == 0
     }
 
-    pub fn runs(&self) -> &[Run] {
+    #[cfg(test)]
+    pub(crate) fn runs(&self) -> &[Run] {
         &self.runs
     }
 
-    pub fn iter(&self) -> impl Iterator<Item = u64> + '_ {
+    pub(crate) fn iter(&self) -> impl Iterator<Item = u64> + '_ {
         self.runs.iter().flat_map(frames_of)
     }
 
-    pub fn contains(&self, n: u64) -> bool {
+    pub(crate) fn contains(&self, n: u64) -> bool {
         let i = self.runs.partition_point(|r| r.last() < n);
         self.runs.get(i).is_some_and(|r| r.contains(n))
     }
 
     /// The frame after `n` in the set, `n` being in it.
-    pub fn next_after(&self, n: u64) -> Option<u64> {
+    pub(crate) fn next_after(&self, n: u64) -> Option<u64> {
         let i = self.runs.partition_point(|r| r.last() < n);
         let r = self.runs.get(i)?;
         match n < r.last() {
@@ -128,13 +129,13 @@ impl FrameSet {
         }
     }
 
-    pub fn last(&self) -> Option<u64> {
+    pub(crate) fn last(&self) -> Option<u64> {
         self.runs.last().map(Run::last)
     }
 
     /// Adds `n`, which must exceed every frame in the set, as a run of its own: a set built
     /// from a sparse subset of another should not stride over the frames in between.
-    pub fn push_apart(&mut self, n: u64) {
+    pub(crate) fn push_apart(&mut self, n: u64) {
         debug_assert!(self.runs.last().is_none_or(|r| r.last() < n));
         self.len += 1;
         self.runs.push(Run {
@@ -145,7 +146,7 @@ impl FrameSet {
     }
 
     /// Adds `n`, which must exceed every frame in the set.
-    pub fn push(&mut self, n: u64) {
+    pub(crate) fn push(&mut self, n: u64) {
         debug_assert!(self.runs.last().is_none_or(|r| r.last() < n));
         self.len += 1;
         let single = Run {
@@ -203,7 +204,7 @@ impl FrameSet {
     }
 
     /// The set without the frames in `sorted` (ascending; frames not in the set are ignored).
-    pub fn without(&self, sorted: &[u64]) -> FrameSet {
+    pub(crate) fn without(&self, sorted: &[u64]) -> FrameSet {
         let mut out = FrameSet::new();
         let mut j = 0;
         for r in &self.runs {
@@ -227,7 +228,7 @@ impl FrameSet {
     }
 
     /// Task `k` of `n` (1-based): every n-th frame of the set starting with its k-th.
-    pub fn shard(&self, k: u64, n: u64) -> FrameSet {
+    pub(crate) fn shard(&self, k: u64, n: u64) -> FrameSet {
         let mut out = FrameSet::new();
         let mut seen = 0u64;
         for r in &self.runs {

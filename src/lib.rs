@@ -1,26 +1,32 @@
 //! rayreel: sequence file → validated scene + timeline → per-frame camera → tracer → frame
 //! buffer → sinks. `commands::run` is the whole program behind the command line.
+//!
+//! Visibility: `pub(crate)` is the default. The modules declared `pub` here, and the `pub`
+//! items in them, are what `main.rs`, the integration tests (`tests/`), the benchmarks and the
+//! fuzz targets reach; everything else is crate-private. Items of the private modules that
+//! are `pub` are re-exported by a public module (`tracer` re-exports `settings`' types,
+//! `tools::preview` `frameset::evenly_spaced`) or named in its public signatures.
 
 pub mod camera;
-pub mod claim;
+mod claim;
 pub mod cli;
 pub mod commands;
 pub mod console;
 pub mod frame;
-pub mod frameset;
+mod frameset;
 mod lanes;
 pub mod output;
-pub mod pattern;
-pub mod plan;
-pub mod progress;
+mod pattern;
+mod plan;
+mod progress;
 pub mod scene;
 pub mod schedule;
 pub mod sequence;
-pub mod settings;
+mod settings;
 pub mod shutter;
-pub mod signals;
+mod signals;
 pub mod timeline;
 pub mod tools;
 pub mod tracer;
-pub mod transfer;
-pub mod warnings;
+mod transfer;
+mod warnings;

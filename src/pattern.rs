@@ -6,11 +6,11 @@
 use std::path::PathBuf;
 
 /// The longest file name (one path component) Linux file systems take, in bytes.
-pub const NAME_MAX: usize = 255;
+pub(crate) const NAME_MAX: usize = 255;
 
 /// Why text is not an output pattern.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub enum PatternError {
+pub(crate) enum PatternError {
     #[error("the output pattern is empty")]
     Empty,
     #[error(
@@ -20,7 +20,7 @@ pub enum PatternError {
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Pattern {
+pub(crate) struct Pattern {
     prefix: String,
     suffix: String,
     /// Width of the number; 0 for a pattern that names one file.
@@ -33,7 +33,7 @@ pub struct Pattern {
 
 impl Pattern {
     /// `last_frame` (the largest frame number) decides the minimum width.
-    pub fn new(pattern: &str, last_frame: u64) -> Result<Pattern, PatternError> {
+    pub(crate) fn new(pattern: &str, last_frame: u64) -> Result<Pattern, PatternError> {
         if pattern.trim().is_empty() {
             return Err(PatternError::Empty);
         }
@@ -73,17 +73,17 @@ impl Pattern {
     }
 
     /// Whether the pattern names one file rather than numbered frames.
-    pub fn is_single(&self) -> bool {
+    pub(crate) fn is_single(&self) -> bool {
         self.digits == 0
     }
 
     /// A one-file pattern holding frame `n`.
-    pub fn holding(mut self, n: u64) -> Pattern {
+    pub(crate) fn holding(mut self, n: u64) -> Pattern {
         self.only = n;
         self
     }
 
-    pub fn frame_path(&self, n: u64) -> PathBuf {
+    pub(crate) fn frame_path(&self, n: u64) -> PathBuf {
         match (self.digits, self.padded) {
             (0, _) => PathBuf::from(&self.prefix),
             (width, true) => PathBuf::from(format!("{}{n:0width$}{}", self.prefix, self.suffix)),
@@ -92,7 +92,7 @@ impl Pattern {
     }
 
     /// The frame number whose file name (last path component) is `name`, if any.
-    pub fn frame_number(&self, name: &str) -> Option<u64> {
+    pub(crate) fn frame_number(&self, name: &str) -> Option<u64> {
         let head = self.prefix.rsplit('/').next().unwrap_or_default();
         if self.is_single() {
             return (name == head).then_some(self.only);
@@ -111,7 +111,7 @@ impl Pattern {
     }
 
     /// The pattern as ffmpeg's image2 reads it: `frames/orbit/frame_%04d.png`.
-    pub fn ffmpeg(&self) -> String {
+    pub(crate) fn ffmpeg(&self) -> String {
         let escape = |s: &str| s.replace('%', "%%");
         match (self.digits, self.padded) {
             (0, _) => self.prefix.clone(),
@@ -121,7 +121,7 @@ impl Pattern {
     }
 
     /// The file extension, lower-cased (`png`, `exr`).
-    pub fn extension(&self) -> String {
+    pub(crate) fn extension(&self) -> String {
         self.frame_path(0)
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase())

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum State {
+pub(crate) enum State {
     UpToDate,
     Stale,
     Missing,
@@ -24,21 +24,21 @@ pub enum State {
 
 /// Every selected frame, by the state of its file.
 #[derive(Debug, Clone, Default)]
-pub struct Plan {
-    pub up_to_date: FrameSet,
-    pub stale: FrameSet,
-    pub missing: FrameSet,
-    pub corrupt: FrameSet,
-    pub foreign: FrameSet,
+pub(crate) struct Plan {
+    pub(crate) up_to_date: FrameSet,
+    pub(crate) stale: FrameSet,
+    pub(crate) missing: FrameSet,
+    pub(crate) corrupt: FrameSet,
+    pub(crate) foreign: FrameSet,
     /// What is wrong with each corrupt file.
-    pub why: Vec<(u64, String)>,
-    pub force: bool,
+    pub(crate) why: Vec<(u64, String)>,
+    pub(crate) force: bool,
 }
 
 /// Frames inspected in parallel at a time: bounds memory whatever the selection.
 const CHUNK: usize = 4096;
 
-pub fn plan(seq: &Sequence, frames: &FrameSet, files: &Files, force: bool) -> Plan {
+pub(crate) fn plan(seq: &Sequence, frames: &FrameSet, files: &Files, force: bool) -> Plan {
     let mut plan = Plan {
         force,
         ..Plan::default()
@@ -118,7 +118,7 @@ fn listed(files: &Files, frames: &FrameSet) -> Option<Vec<u64>> {
 }
 
 /// The directory a frame file lives in (`.` for a bare name).
-pub fn directory(frame: &Path) -> PathBuf {
+pub(crate) fn directory(frame: &Path) -> PathBuf {
     match frame.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -146,12 +146,12 @@ impl Plan {
     }
 
     /// Every selected frame.
-    pub fn selected(&self) -> FrameSet {
+    pub(crate) fn selected(&self) -> FrameSet {
         FrameSet::union(&self.by_state().map(|(_, s)| s))
     }
 
     /// Frames that get rendered and written.
-    pub fn to_render(&self) -> FrameSet {
+    pub(crate) fn to_render(&self) -> FrameSet {
         if self.force {
             return self.selected();
         }
@@ -159,7 +159,7 @@ impl Plan {
     }
 
     /// Frames whose files are foreign and stay untouched.
-    pub fn blocked(&self) -> FrameSet {
+    pub(crate) fn blocked(&self) -> FrameSet {
         match self.force {
             true => FrameSet::new(),
             false => self.foreign.clone(),
@@ -167,7 +167,7 @@ impl Plan {
     }
 
     /// Every state with its frames, in the order reports list them.
-    pub fn by_state(&self) -> [(&'static str, &FrameSet); 5] {
+    pub(crate) fn by_state(&self) -> [(&'static str, &FrameSet); 5] {
         [
             ("up to date", &self.up_to_date),
             ("stale", &self.stale),
@@ -178,17 +178,17 @@ impl Plan {
     }
 
     /// How many frames each state has, in the order of `by_state`.
-    pub fn counts(&self) -> [(&'static str, u64); 5] {
+    pub(crate) fn counts(&self) -> [(&'static str, u64); 5] {
         self.by_state().map(|(what, set)| (what, set.len()))
     }
 
     /// How many frames are selected.
-    pub fn selected_count(&self) -> u64 {
+    pub(crate) fn selected_count(&self) -> u64 {
         self.by_state().iter().map(|(_, s)| s.len()).sum()
     }
 
     /// `48 frames: 30 up to date, 2 stale, 16 missing → rendering 18`.
-    pub fn summary(&self) -> String {
+    pub(crate) fn summary(&self) -> String {
         format!(
             "{} → rendering {}{}",
             self.status_line(),
@@ -198,7 +198,7 @@ impl Plan {
     }
 
     /// `48 frames: 30 up to date, 2 stale, 16 missing`.
-    pub fn status_line(&self) -> String {
+    pub(crate) fn status_line(&self) -> String {
         let parts: Vec<String> = self
             .by_state()
             .iter()

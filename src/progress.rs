@@ -9,7 +9,7 @@ use std::cell::Cell;
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 
-pub struct Progress {
+pub(crate) struct Progress {
     mode: Mode,
     /// Frames this run will render.
     total: u64,
@@ -30,7 +30,7 @@ enum Mode {
 }
 
 impl Progress {
-    pub fn new(total: u64, sequence_frames: u64, quiet: bool) -> Progress {
+    pub(crate) fn new(total: u64, sequence_frames: u64, quiet: bool) -> Progress {
         let mode = if quiet {
             Mode::Quiet
         } else if std::io::stderr().is_terminal() {
@@ -50,7 +50,7 @@ impl Progress {
     }
 
     /// One JSON object per line on stderr, for render farms.
-    pub fn json(total: u64, sequence_frames: u64) -> Progress {
+    pub(crate) fn json(total: u64, sequence_frames: u64) -> Progress {
         crate::console::set_json(true);
         Progress {
             mode: Mode::Json,
@@ -59,7 +59,7 @@ impl Progress {
     }
 
     /// Frames a new pass of work will render (claim mode re-plans).
-    pub fn add_total(&mut self, more: u64) {
+    pub(crate) fn add_total(&mut self, more: u64) {
         self.total += more;
         if let Mode::Bar(bar) = &self.mode {
             bar.set_length(self.total);
@@ -69,7 +69,7 @@ impl Progress {
     /// The plan before the first frame: its summary (`48 frames: 30 up to date, 18 missing →
     /// rendering 18`), or in JSON a `start` event with the count of frames in every state
     /// (streams without files have no plan: every selected frame is rendered).
-    pub fn start(&self, plan: Option<(&str, &[(&str, u64)])>, selected: u64) {
+    pub(crate) fn start(&self, plan: Option<(&str, &[(&str, u64)])>, selected: u64) {
         let Mode::Json = self.mode else {
             return plan.into_iter().for_each(|(summary, _)| self.note(summary));
         };
@@ -86,7 +86,7 @@ impl Progress {
     }
 
     /// The first Ctrl-C or SIGTERM: said at once, whatever the mode.
-    pub fn interrupt(&self, signal: &str, in_flight: usize, text: &str) {
+    pub(crate) fn interrupt(&self, signal: &str, in_flight: usize, text: &str) {
         match &self.mode {
             Mode::Json => eprintln!(
                 "{{\"event\": \"interrupt\", \"signal\": \"{signal}\", \"in_flight\": {in_flight}, \"done\": {}, \"text\": {}}}",
@@ -102,7 +102,7 @@ impl Progress {
     }
 
     /// A line for the user that is not about one frame (plans).
-    pub fn note(&self, text: &str) {
+    pub(crate) fn note(&self, text: &str) {
         match &self.mode {
             Mode::Quiet => {}
             Mode::Lines => eprintln!("{}", printable(text)),
@@ -112,7 +112,7 @@ impl Progress {
     }
 
     /// A command line the user asked for (`--print-ffmpeg`): shown even with `--quiet`.
-    pub fn command(&self, text: &str) {
+    pub(crate) fn command(&self, text: &str) {
         match &self.mode {
             Mode::Bar(bar) => bar.println(printable(text)),
             Mode::Json => eprintln!("{{\"event\": \"command\", \"text\": {}}}", quote(text)),
@@ -121,7 +121,7 @@ impl Progress {
     }
 
     /// A warning: shown even with `--quiet`.
-    pub fn warn(&self, text: &str) {
+    pub(crate) fn warn(&self, text: &str) {
         match &self.mode {
             Mode::Bar(bar) => bar.println(printable(text)),
             Mode::Json => eprintln!("{{\"event\": \"warning\", \"text\": {}}}", quote(text)),
@@ -131,7 +131,7 @@ impl Progress {
 
     /// Frames other processes hold, and the first few of their claims: shown even with
     /// `--quiet`, since a worker that waits must say on what.
-    pub fn waiting(&self, frames: &str, count: usize, claims: &[Held]) {
+    pub(crate) fn waiting(&self, frames: &str, count: usize, claims: &[Held]) {
         let age = |h: &Held| h.heartbeat.map_or(-1.0, |a| a.as_secs_f64());
         if let Mode::Json = self.mode {
             let claims: Vec<String> = claims
@@ -177,12 +177,12 @@ impl Progress {
     }
 
     /// Whether `frame_skipped` shows anything (one JSON line per frame).
-    pub fn reports_skipped(&self) -> bool {
+    pub(crate) fn reports_skipped(&self) -> bool {
         matches!(self.mode, Mode::Json)
     }
 
     /// A frame that needs no work (`up-to-date`) or may not be touched (`foreign`).
-    pub fn frame_skipped(&self, n: u64, path: &str, status: &str) {
+    pub(crate) fn frame_skipped(&self, n: u64, path: &str, status: &str) {
         self.skipped.set(self.skipped.get() + 1);
         if let Mode::Json = self.mode {
             eprintln!(
@@ -194,7 +194,7 @@ impl Progress {
         }
     }
 
-    pub fn frame_done(&mut self, n: u64, destination: &str, seconds: f64) {
+    pub(crate) fn frame_done(&mut self, n: u64, destination: &str, seconds: f64) {
         self.done += 1;
         match &self.mode {
             Mode::Quiet => {}
@@ -220,7 +220,7 @@ impl Progress {
         }
     }
 
-    pub fn frame_failed(&self, n: u64, error: &str) {
+    pub(crate) fn frame_failed(&self, n: u64, error: &str) {
         self.failed.set(self.failed.get() + 1);
         if let Mode::Json = self.mode {
             eprintln!(
@@ -233,7 +233,7 @@ impl Progress {
     }
 
     /// Clears the bar and prints the closing summary line.
-    pub fn finish(&self, interrupted: bool) {
+    pub(crate) fn finish(&self, interrupted: bool) {
         let wall = self.start.elapsed().as_secs_f64();
         let rate = if wall > 0.0 {
             self.done as f64 / wall
@@ -293,7 +293,7 @@ fn style(timed: bool) -> ProgressStyle {
 }
 
 /// `3.6 frames/s`, or `14 s/frame` when frames take longer than a second.
-pub fn rate(per_second: f64) -> String {
+pub(crate) fn rate(per_second: f64) -> String {
     match per_second {
         r if r >= 1.0 => format!("{r:.1} frames/s"),
         r if r > 0.0 => format!("{:.1} s/frame", 1.0 / r),

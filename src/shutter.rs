@@ -32,7 +32,7 @@ pub struct Shutter {
 impl Shutter {
     /// The time of instant `j` of the frame shown at time `t`: the middle of the j-th of
     /// `INSTANTS` equal parts of [t + (offset − ½)·Δ, t + (offset + ½)·Δ], Δ = angle/360/fps.
-    pub fn instant(&self, fps: f64, t: f64, j: usize) -> f64 {
+    pub(crate) fn instant(&self, fps: f64, t: f64, j: usize) -> f64 {
         let open = self.angle / 360.0 / fps;
         let fraction = (self.offset - 0.5) + (j as f64 + 0.5) / INSTANTS as f64;
         t + open * fraction
@@ -53,16 +53,16 @@ pub struct Exposure {
 /// and the cameras it is exposed with, or why there are none. Every stage that needs a frame's
 /// camera takes it from here.
 #[derive(Debug, Clone, PartialEq)]
-pub struct FrameView {
-    pub frame: u64,
-    pub time: f64,
-    pub pose: Pose,
-    pub exposure: Result<Exposure, NoCamera>,
+pub(crate) struct FrameView {
+    pub(crate) frame: u64,
+    pub(crate) time: f64,
+    pub(crate) pose: Pose,
+    pub(crate) exposure: Result<Exposure, NoCamera>,
 }
 
 impl FrameView {
     /// Frame `n` of `timeline` seen through `shutter`.
-    pub fn of_frame(timeline: &Timeline, shutter: Option<Shutter>, n: u64) -> FrameView {
+    pub(crate) fn of_frame(timeline: &Timeline, shutter: Option<Shutter>, n: u64) -> FrameView {
         let time = timeline.time_of(n);
         let (pose, lens) = timeline.view_at(time);
         let exposure = Camera::new(&pose)
@@ -95,7 +95,7 @@ impl std::fmt::Display for NoCamera {
 
 impl Exposure {
     /// These cameras in coordinates whose origin is `by`.
-    pub fn shifted(&self, by: DVec3) -> Exposure {
+    pub(crate) fn shifted(&self, by: DVec3) -> Exposure {
         let shift = |c: &Camera| Camera {
             origin: c.origin - by,
             ..*c
@@ -144,13 +144,13 @@ impl Exposure {
     }
 
     /// Whether eye rays leave from more than one point: through a lens, or from a moving camera.
-    pub fn sampled(&self) -> bool {
+    pub(crate) fn sampled(&self) -> bool {
         self.camera.lens_radius > 0.0 || !self.instants.is_empty()
     }
 }
 
 /// The camera and lens of `timeline` at time t.
-pub fn camera_at(timeline: &Timeline, t: f64) -> Result<Camera, NoCamera> {
+pub(crate) fn camera_at(timeline: &Timeline, t: f64) -> Result<Camera, NoCamera> {
     let (pose, lens) = timeline.view_at(t);
     Camera::new(&pose)
         .map(|c| c.with_lens(lens))

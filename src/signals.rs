@@ -14,12 +14,12 @@ struct Signals {
 static SIGNALS: std::sync::OnceLock<Signals> = std::sync::OnceLock::new();
 
 /// Whether Ctrl-C (SIGINT) or SIGTERM came.
-pub fn interrupted() -> bool {
+pub(crate) fn interrupted() -> bool {
     SIGNALS.get().is_some_and(|s| s.any.load(Ordering::SeqCst))
 }
 
 /// The exit code for the signal that came: 128 + its number (130 SIGINT, 143 SIGTERM).
-pub fn interrupt_code() -> u8 {
+pub(crate) fn interrupt_code() -> u8 {
     match signal_name() {
         "SIGTERM" => 143,
         _ => 130,
@@ -42,7 +42,7 @@ pub(crate) fn signal_name() -> &'static str {
 /// The first Ctrl-C or SIGTERM asks the run to stop: frames in flight are cancelled, the
 /// finished ones stay. A second one exits at once with 128 + its number (a later run removes
 /// any temporary file that leaves behind). Installed once per process.
-pub fn install_interrupt_handler() {
+pub(crate) fn install_interrupt_handler() {
     use signal_hook::consts::{SIGINT, SIGTERM};
     use signal_hook::flag;
     SIGNALS.get_or_init(|| {

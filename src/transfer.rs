@@ -17,7 +17,7 @@ pub enum Encoding {
 }
 
 impl Encoding {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Encoding::Srgb => "srgb",
             Encoding::Linear => "linear",
@@ -29,7 +29,7 @@ impl Encoding {
 /// (a last +inf stops the scan), and `start[b]` the level at the bottom of bucket b, the
 /// values sharing their exponent and top mantissa bits. A bucket is narrower than a level near
 /// 1, so the scan from its start takes at most a step or two.
-pub struct Curve {
+pub(crate) struct Curve {
     thresholds: Vec<f32>,
     /// u32, not u16: AVX2 gathers 32-bit lanes.
     start: Vec<u32>,
@@ -82,7 +82,7 @@ impl Curve {
     }
 
     /// The curve for 8-bit (`max` 255) or 16-bit (65535) values, built once.
-    pub fn of(max: u32) -> &'static Curve {
+    pub(crate) fn of(max: u32) -> &'static Curve {
         static EIGHT: OnceLock<Curve> = OnceLock::new();
         static SIXTEEN: OnceLock<Curve> = OnceLock::new();
         match max {
@@ -93,7 +93,7 @@ impl Curve {
 
     /// The level of linear value `c`: NaN and negatives are 0, values above 1 the maximum.
     #[inline(always)]
-    pub fn level(&self, c: f32) -> u32 {
+    pub(crate) fn level(&self, c: f32) -> u32 {
         if self.single {
             return self.level_single(c);
         }
@@ -107,7 +107,7 @@ impl Curve {
 
     /// `level` when every bucket holds at most one threshold: branch-free.
     #[inline(always)]
-    pub fn level_single(&self, c: f32) -> u32 {
+    pub(crate) fn level_single(&self, c: f32) -> u32 {
         let (x, bucket) = self.bucket(c);
         self.start[bucket] + u32::from(x >= self.next[bucket])
     }
@@ -122,7 +122,7 @@ impl Curve {
     }
 
     /// Whether one comparison decides every level (see `single`).
-    pub fn single(&self) -> bool {
+    pub(crate) fn single(&self) -> bool {
         self.single
     }
 

@@ -31,7 +31,7 @@ const INSIDE_BUDGET: u64 = 20_000_000;
 /// `frames 9-11: the camera is inside objects[0] (sphere)` for every run of frames where the
 /// camera is inside a sphere or behind a plane; `check` and `render` print these. Long
 /// timelines are sampled (every frame up to 100 000, fewer in scenes of many objects).
-pub fn inside_warnings(seq: &Sequence) -> Vec<String> {
+pub(crate) fn inside_warnings(seq: &Sequence) -> Vec<String> {
     let t = &seq.timeline;
     let frames = checked_frames(seq);
     let positions: Vec<DVec3> = frames.iter().map(|&f| t.pose_of(f).position).collect();
@@ -56,7 +56,7 @@ fn checked_frames(seq: &Sequence) -> Vec<u64> {
 /// `frames 0-40: f32 places objects[3] (sphere) only to 6.1 pixels (limit 4), so it is traced
 /// in f64` for every run of frames f32 cannot resolve (see `tracer::precision`), when the
 /// settings ask for f32; sampled like `inside_warnings`. The pixels are the run's worst.
-pub fn precision_warnings(seq: &Sequence) -> Vec<String> {
+pub(crate) fn precision_warnings(seq: &Sequence) -> Vec<String> {
     if seq.settings.precision != Precision::F32 {
         return Vec::new();
     }

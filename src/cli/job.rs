@@ -3,7 +3,7 @@
 //! (clap has already checked each of them), the frame spec and shard become this task's
 //! frames, and the output pattern and format become the file sink.
 
-use super::{BitDepth, JobArgs, ShardSpec, resolve_shard};
+use super::{BitDepth, JobArgs, RenderArgs, ShardSpec, resolve_shard};
 use crate::frameset::FrameSet;
 use crate::output::{FileFormat, Files};
 use crate::sequence::{self, LoadError, Quality, Sequence, output_pattern, preset};
@@ -22,10 +22,10 @@ pub enum JobError {
 #[derive(Debug)]
 pub struct Job {
     pub seq: Sequence,
-    pub frames: FrameSet,
+    pub(crate) frames: FrameSet,
     /// `--output` was given (with `--pipe`, files are written only then).
-    pub output_given: bool,
-    pub sixteen_bit: bool,
+    pub(crate) output_given: bool,
+    pub(crate) sixteen_bit: bool,
 }
 
 impl Job {
@@ -37,7 +37,7 @@ impl Job {
     /// `new` for `status`, the final check of a whole farm job: `--shard auto` outside a job
     /// array (no scheduler index set) means every shard, so the array script's own line can
     /// be repeated with `status` after the array ends.
-    pub fn for_status(args: &JobArgs) -> Result<Job, JobError> {
+    pub(crate) fn for_status(args: &JobArgs) -> Result<Job, JobError> {
         Job::load(args, true)
     }
 
@@ -55,7 +55,7 @@ impl Job {
 
     /// The file pattern and format. A pattern without a frame number holds one frame: the
     /// one selected.
-    pub fn files(&self, args: &JobArgs) -> Result<Files, JobError> {
+    pub(crate) fn files(&self, args: &JobArgs) -> Result<Files, JobError> {
         let seq = &self.seq;
         let mut pattern =
             output_pattern(&seq.output, seq.timeline.last_frame()).map_err(JobError::Usage)?;
@@ -89,6 +89,23 @@ impl Job {
             )));
         }
         Ok(Files { pattern, format })
+    }
+
+    /// The file sink of a render: with `--pipe` the stream is the product, and files are
+    /// written too only when `--output` asks for them; `--claim` shares files, so it takes
+    /// no stream.
+    pub(crate) fn render_files(&self, args: &RenderArgs) -> Result<Option<Files>, JobError> {
+        let files = match args.pipe.is_none() || self.output_given {
+            true => Some(self.files(&args.job)?),
+            false => None,
+        };
+        if args.claim && (files.is_none() || args.pipe.is_some()) {
+            return Err(JobError::Usage(
+                "--claim shares frame files between processes; it cannot be combined with --pipe"
+                    .into(),
+            ));
+        }
+        Ok(files)
     }
 }
 

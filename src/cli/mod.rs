@@ -4,11 +4,10 @@
 //! arguments into one typed job in one step.
 
 pub mod job;
-pub mod spec;
+pub(crate) mod spec;
 
-pub use spec::{
-    FrameSpec, ShardSpec, SpecError, parse_frame_spec, parse_shard, parse_size, resolve_shard,
-};
+pub use spec::{FrameSpec, SpecError, parse_frame_spec, parse_size};
+pub(crate) use spec::{ShardSpec, parse_shard, resolve_shard};
 
 use crate::output::stream::StreamFormat;
 use crate::output::{Compression, ExrPrecision};
@@ -66,23 +65,23 @@ pub enum Command {
 #[derive(Debug, Args)]
 pub struct CheckArgs {
     /// The sequence file (YAML; `-` reads standard input).
-    pub file: PathBuf,
+    pub(crate) file: PathBuf,
 }
 
 #[derive(Debug, Args)]
 pub struct CameraArgs {
     /// The sequence file (YAML; `-` reads standard input).
-    pub file: PathBuf,
+    pub(crate) file: PathBuf,
     /// `csv` (a header line, then one line per frame) or `json` (one object per line).
     #[arg(long, value_enum, default_value_t = CameraFormat::Csv)]
-    pub format: CameraFormat,
+    pub(crate) format: CameraFormat,
     /// Frames to print, e.g. 0-23 (default: all).
     #[arg(long, value_name = "SPEC", value_parser = parse_frame_spec)]
-    pub frames: Option<FrameSpec>,
+    pub(crate) frames: Option<FrameSpec>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum CameraFormat {
+pub(crate) enum CameraFormat {
     Csv,
     Json,
 }
@@ -91,57 +90,57 @@ pub enum CameraFormat {
 pub struct BenchArgs {
     /// Runs per figure (the median is reported, with min and max).
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=1000))]
-    pub runs: u64,
+    pub(crate) runs: u64,
     /// Only this figure: kernels, mesh, render, threads, reflections, glass, sequence,
     /// scaling or povray.
     #[arg(long, value_parser = ["kernels", "mesh", "render", "threads", "reflections", "glass", "sequence", "scaling", "povray"])]
-    pub only: Option<String>,
+    pub(crate) only: Option<String>,
     /// Small sizes and scenes, to check the command quickly.
     #[arg(long)]
-    pub quick: bool,
+    pub(crate) quick: bool,
 }
 
 #[derive(Debug, Args)]
 pub struct MeasureArgs {
     /// The sequence file (YAML; `-` reads standard input).
-    pub file: PathBuf,
+    pub(crate) file: PathBuf,
     /// The frame to measure.
     #[arg(long, default_value_t = 0)]
-    pub frame: u64,
+    pub(crate) frame: u64,
     /// Measurement size (default: the sequence's aspect ratio at 320 pixels wide).
     #[arg(long, value_parser = parse_size, value_name = "WxH")]
-    pub size: Option<(u32, u32)>,
+    pub(crate) size: Option<(u32, u32)>,
     /// Timed runs per setting; the median is reported, with min and max.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=100))]
-    pub runs: u64,
+    pub(crate) runs: u64,
     /// Encoding of the 8-bit values errors are measured on (default: the sequence's).
     #[arg(long, value_enum)]
-    pub encoding: Option<Encoding>,
+    pub(crate) encoding: Option<Encoding>,
     /// Directory for measure.csv, measure.json and measure.svg (default: frames/NAME/measure).
     #[arg(long, value_name = "DIR")]
-    pub out: Option<PathBuf>,
+    pub(crate) out: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
 pub struct PreviewArgs {
     /// The sequence file (YAML; `-` reads standard input).
-    pub file: PathBuf,
+    pub(crate) file: PathBuf,
     /// Directory for NAME_path.png and NAME_sheet.png (default: a `preview` folder beside
     /// the frames, e.g. frames/NAME/preview).
     #[arg(long, value_name = "DIR")]
-    pub out: Option<PathBuf>,
+    pub(crate) out: Option<PathBuf>,
     /// Frames on the contact sheet, e.g. 0-100:10 (default: --tiles frames evenly spaced).
     #[arg(long, value_name = "SPEC", value_parser = parse_frame_spec)]
-    pub frames: Option<FrameSpec>,
+    pub(crate) frames: Option<FrameSpec>,
     /// Number of evenly spaced frames on the contact sheet.
     #[arg(long, value_name = "N", default_value_t = crate::tools::preview::DEFAULT_TILES,
           value_parser = clap::value_parser!(u64).range(1..=crate::tools::preview::MAX_TILES))]
-    pub tiles: u64,
+    pub(crate) tiles: u64,
 }
 
 /// Bits per channel of PNG files and raw streams.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum BitDepth {
+pub(crate) enum BitDepth {
     #[value(name = "8")]
     Eight,
     #[value(name = "16")]
@@ -153,63 +152,63 @@ pub enum BitDepth {
 #[derive(Debug, Args)]
 pub struct JobArgs {
     /// The sequence file (YAML; `-` reads standard input).
-    pub file: PathBuf,
+    pub(crate) file: PathBuf,
     /// Image size, e.g. 640x360 (overrides render.width/height).
     #[arg(long, value_parser = parse_size, value_name = "WxH")]
-    pub size: Option<(u32, u32)>,
+    pub(crate) size: Option<(u32, u32)>,
     /// Output pattern: a run of '#' or ffmpeg's %04d becomes the zero-padded frame number; a
     /// name with neither holds the one frame selected (still.png).
     #[arg(long, short, value_name = "PATTERN")]
-    pub output: Option<String>,
+    pub(crate) output: Option<String>,
     /// Surfaces one path may visit (1 = no reflections).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
-    pub max_depth: Option<u32>,
+    pub(crate) max_depth: Option<u32>,
     /// Uniform samples per pixel (replaces render.samples and turns adaptive sampling off).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SAMPLES as i64))]
-    pub samples: Option<u32>,
+    pub(crate) samples: Option<u32>,
     /// Quality preset: draft (1 sample, depth 2, half size), preview (4 samples), final
     /// (adaptive 4-64 samples, depth 5); explicit flags override it.
     #[arg(long, value_enum)]
-    pub quality: Option<Quality>,
+    pub(crate) quality: Option<Quality>,
     /// Frames, e.g. 7, 0-23, 1..10, 5-, last, 0-100:5, 1-100x2, 1,3,10-12 (default: all).
     #[arg(long, value_name = "SPEC", value_parser = parse_frame_spec)]
-    pub frames: Option<FrameSpec>,
+    pub(crate) frames: Option<FrameSpec>,
     /// The number of the first frame (replaces timeline.first_frame; studios start at 1001).
     #[arg(long, alias = "frame-offset", value_name = "N",
           value_parser = clap::value_parser!(u64).range(0..=MAX_FIRST_FRAME))]
-    pub first_frame: Option<u64>,
+    pub(crate) first_frame: Option<u64>,
     /// This task's share of the frames: K/N (K from 1 to N, interleaved), or `auto` to read
     /// SLURM_ARRAY_TASK_ID/MIN/COUNT or JOB_COMPLETION_INDEX with --shard-count.
     #[arg(long, value_name = "K/N|auto", value_parser = parse_shard)]
-    pub shard: Option<ShardSpec>,
+    pub(crate) shard: Option<ShardSpec>,
     /// Number of shards for `--shard auto` under Kubernetes Indexed Jobs.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
-    pub shard_count: Option<u64>,
+    pub(crate) shard_count: Option<u64>,
     /// Bits per channel of PNG files and streams.
     #[arg(long, value_name = "BITS", value_enum, default_value_t = BitDepth::Eight)]
-    pub bit_depth: BitDepth,
+    pub(crate) bit_depth: BitDepth,
     /// Float precision of the R, G, B channels of EXR files.
     #[arg(long, value_name = "PRECISION", value_enum, default_value_t = ExrPrecision::Half)]
-    pub exr_precision: ExrPrecision,
+    pub(crate) exr_precision: ExrPrecision,
     /// PNG compression level.
     #[arg(long, value_name = "LEVEL", value_enum, default_value_t = Compression::Fast)]
-    pub png_compression: Compression,
+    pub(crate) png_compression: Compression,
     /// Add a Z channel (planar depth) to EXR files (same as render.depth: true).
     #[arg(long)]
-    pub depth: bool,
+    pub(crate) depth: bool,
     /// How PNG and stream values encode the linear colour (replaces render.encoding).
     #[arg(long, value_enum)]
-    pub encoding: Option<Encoding>,
+    pub(crate) encoding: Option<Encoding>,
     /// Exposure in stops: the colour is multiplied by 2^STOPS (replaces render.exposure).
     #[arg(long, value_name = "STOPS", allow_negative_numbers = true)]
-    pub exposure: Option<f64>,
+    pub(crate) exposure: Option<f64>,
     /// Coverage as alpha: RGBA PNGs and streams, an A channel in EXR (as render.alpha: true).
     #[arg(long)]
-    pub alpha: bool,
+    pub(crate) alpha: bool,
     /// Arithmetic of the tracer: f64, or f32 at about twice the speed (replaces
     /// render.precision).
     #[arg(long, value_enum)]
-    pub precision: Option<crate::settings::Precision>,
+    pub(crate) precision: Option<crate::settings::Precision>,
 }
 
 /// `render`'s options; `status` takes them too and ignores those that only shape a run.
@@ -219,42 +218,42 @@ pub struct RenderArgs {
     pub job: JobArgs,
     /// Worker threads (default: all cores; at most 1024).
     #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..=MAX_THREADS as i64))]
-    pub threads: Option<u16>,
+    pub(crate) threads: Option<u16>,
     /// No progress bar and no per-frame lines.
     #[arg(long, short)]
-    pub quiet: bool,
+    pub(crate) quiet: bool,
     /// Progress format on stderr: a bar or lines (`human`), or one JSON object per line.
     #[arg(long, value_enum, default_value_t = ProgressFormat::Human)]
-    pub progress: ProgressFormat,
+    pub(crate) progress: ProgressFormat,
     /// Stream frames to stdout (raw rgb24/rgb48le or PNGs) for ffmpeg; files are then only
     /// written when --output is given too.
     #[arg(long, value_name = "FORMAT")]
-    pub pipe: Option<StreamFormat>,
+    pub(crate) pipe: Option<StreamFormat>,
     /// Print (on stderr) the ffmpeg command that reads the --pipe stream, or the frame files.
     #[arg(long)]
-    pub print_ffmpeg: bool,
+    pub(crate) print_ffmpeg: bool,
     /// Print which frames are up to date, stale, missing, corrupt or foreign, and render nothing.
     #[arg(long)]
-    pub dry_run: bool,
+    pub(crate) dry_run: bool,
     /// Render and overwrite every selected frame, even up-to-date ones and files rayreel did
     /// not write.
     #[arg(long)]
-    pub force: bool,
+    pub(crate) force: bool,
     /// Share the frames with other rayreel processes on the same directory through claim
     /// files; a claim whose owner died or went silent is taken over.
     #[arg(long)]
-    pub claim: bool,
+    pub(crate) claim: bool,
     /// Seconds without a heartbeat after which another host's claim is taken over.
     #[arg(long, value_name = "SECONDS", default_value_t = 120, value_parser = clap::value_parser!(u64).range(2..))]
-    pub claim_timeout: u64,
+    pub(crate) claim_timeout: u64,
 }
 
 /// Most worker threads `--threads` may ask for: more than machines have cores, few enough to
 /// start in moments.
-pub const MAX_THREADS: u16 = 1024;
+pub(crate) const MAX_THREADS: u16 = 1024;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum ProgressFormat {
+pub(crate) enum ProgressFormat {
     Human,
     Json,
 }

@@ -61,13 +61,13 @@ pub enum SpecError {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ShardSpec {
+pub(crate) enum ShardSpec {
     /// 1-based task number and task count.
     Fixed(u64, u64),
     Auto,
 }
 
-pub fn parse_shard(s: &str) -> Result<ShardSpec, SpecError> {
+pub(crate) fn parse_shard(s: &str) -> Result<ShardSpec, SpecError> {
     if s == "auto" {
         return Ok(ShardSpec::Auto);
     }
@@ -84,7 +84,7 @@ pub fn parse_shard(s: &str) -> Result<ShardSpec, SpecError> {
 }
 
 /// Turns `--shard auto` into K/N from the scheduler's environment.
-pub fn resolve_shard(
+pub(crate) fn resolve_shard(
     spec: ShardSpec,
     shard_count: Option<u64>,
     env: &dyn Fn(&str) -> Option<String>,

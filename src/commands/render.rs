@@ -25,24 +25,14 @@ fn prepare(files: &Files, frames: &FrameSet) -> Result<(), Error> {
     Ok(())
 }
 
-pub fn render(args: RenderArgs) -> Result<(), Error> {
+pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     // From here on every line on stderr is one JSON object, errors included.
     crate::console::set_json(args.progress == ProgressFormat::Json);
     let spec = Job::new(&args.job)?;
     let sixteen_bit = spec.sixteen_bit;
     let warnings = crate::warnings::for_sequence(&spec.seq);
-    // With --pipe the stream is the product; files come too only when asked for explicitly.
-    let files = match args.pipe.is_none() || spec.output_given {
-        true => Some(spec.files(&args.job)?),
-        false => None,
-    };
+    let files = spec.render_files(&args)?;
     let Job { seq, frames, .. } = spec;
-    if args.claim && (files.is_none() || args.pipe.is_some()) {
-        return Err(Error::Usage(
-            "--claim shares frame files between processes; it cannot be combined with --pipe"
-                .into(),
-        ));
-    }
     if args.dry_run {
         warnings
             .iter()
@@ -61,20 +51,8 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         .as_ref()
         .map(|f| plan::plan(&seq, &frames, f, args.force));
     let tasks = tasks(&frames, plan.as_ref(), stream.is_some());
-    let mut progress = match args.progress {
-        ProgressFormat::Json if !args.quiet => {
-            Progress::json(tasks.len() as u64, seq.timeline.frame_count)
-        }
-        _ => Progress::new(tasks.len() as u64, seq.timeline.frame_count, args.quiet),
-    };
-    for w in &warnings {
-        progress.warn(&format!("warning: {w}"));
-    }
-    let planned = plan.as_ref().map(|p| (p.summary(), p.counts()));
-    let planned = planned
-        .as_ref()
-        .map(|(summary, counts)| (summary.as_str(), &counts[..]));
-    progress.start(planned, frames.len());
+    let mut progress = progress_for(&args, tasks.len() as u64, seq.timeline.frame_count);
+    start(&progress, &warnings, plan.as_ref(), frames.len());
     if let (Some(plan), Some(files)) = (&plan, &files) {
         report_skipped(&progress, plan, files);
     }
@@ -93,6 +71,26 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     };
     let outcome = run_job(&pool, batch, &frames, &mut progress)?;
     finish(outcome, plan.as_ref(), stream.is_some())
+}
+
+/// Progress as `--progress` and `--quiet` ask: `total` frames to render of `frame_count`.
+fn progress_for(args: &RenderArgs, total: u64, frame_count: u64) -> Progress {
+    match args.progress {
+        ProgressFormat::Json if !args.quiet => Progress::json(total, frame_count),
+        _ => Progress::new(total, frame_count, args.quiet),
+    }
+}
+
+/// The warnings, then the plan (or the selection when streaming without files).
+fn start(progress: &Progress, warnings: &[String], plan: Option<&Plan>, selected: u64) {
+    for w in warnings {
+        progress.warn(&format!("warning: {w}"));
+    }
+    let planned = plan.map(|p| (p.summary(), p.counts()));
+    let planned = planned
+        .as_ref()
+        .map(|(summary, counts)| (summary.as_str(), &counts[..]));
+    progress.start(planned, selected);
 }
 
 /// The worker threads, started before anything else happens: a count the machine cannot
@@ -264,7 +262,7 @@ fn print_dry_run(
         }
         None => (format!("would stream frames: {frames}\n"), frames.len()),
     };
-    let (cost, warning) = super::cost(seq, rendering);
+    let (cost, warning) = super::check::cost(seq, rendering);
     if let Some(w) = warning {
         crate::console::warning(&w);
     }
@@ -430,7 +428,7 @@ pub(crate) fn plural(n: u64, noun: &str) -> String {
 
 /// `rayreel status`: the completeness of the output against the sequence; exit 0 only when
 /// every selected frame is up to date.
-pub fn status(args: RenderArgs) -> Result<(), Error> {
+pub(crate) fn status(args: RenderArgs) -> Result<(), Error> {
     let spec = Job::for_status(&args.job)?;
     let files = spec.files(&args.job)?;
     let (seq, frames) = (spec.seq, spec.frames);

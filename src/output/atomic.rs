@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, SystemTime};
 
 /// Marker in our temporary names.
-pub const TEMP_MARKER: &str = ".rayreel-tmp-";
+pub(crate) const TEMP_MARKER: &str = ".rayreel-tmp-";
 
 /// The longest a temporary's name adds to NAME: `.`, the marker, a host name of at most 64
 /// bytes, `-`, a pid of at most 10 digits, `-` and 16 hex digits.
@@ -30,7 +30,7 @@ const TEMP_EXTRA: usize = 1 + TEMP_MARKER.len() + 64 + 1 + 10 + 1 + 16;
 const FOREIGN_HOST_GRACE: Duration = Duration::from_secs(24 * 3600);
 
 /// This machine's name (cached), reduced to at most 64 characters safe in a file name.
-pub fn hostname() -> &'static str {
+pub(crate) fn hostname() -> &'static str {
     static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
     HOST.get_or_init(read_hostname)
 }
@@ -51,7 +51,7 @@ fn read_hostname() -> String {
 
 /// `.NAME{suffix}` beside `path`, with a hash for NAME when the name would pass NAME_MAX
 /// with a suffix of up to `extra` bytes (the leading dot included).
-pub fn sidecar(path: &Path, suffix: &str, extra: usize) -> PathBuf {
+pub(crate) fn sidecar(path: &Path, suffix: &str, extra: usize) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy())
@@ -68,7 +68,7 @@ fn stem(name: &str, extra: usize) -> String {
 }
 
 /// A fresh `.NAME.rayreel-tmp-HOST-PID-RANDOM` for `path`.
-pub fn temp_path(path: &Path) -> PathBuf {
+pub(crate) fn temp_path(path: &Path) -> PathBuf {
     let suffix = format!(
         "{TEMP_MARKER}{}-{}-{:016x}",
         hostname(),
@@ -96,7 +96,7 @@ fn random() -> u64 {
     keyed.finish()
 }
 
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let (tmp, mut file) = create_temp(path)?;
     let result = (|| {
         file.write_all(bytes)?;
@@ -145,7 +145,7 @@ fn parse_temp(file_name: &str) -> Option<(&str, &str, i32)> {
 /// Removes the temporaries in `dir` of the frames `frames` (named by `pattern`) that processes
 /// which no longer run left behind (same host, dead pid; other hosts' after a day). Nothing
 /// else is touched, whatever its name. Returns how many were removed.
-pub fn clean_leftovers(dir: &Path, pattern: &Pattern, frames: &FrameSet) -> usize {
+pub(crate) fn clean_leftovers(dir: &Path, pattern: &Pattern, frames: &FrameSet) -> usize {
     let stale = stale_temporaries(dir);
     if stale.is_empty() {
         return 0;
@@ -219,7 +219,7 @@ fn stale_temporaries(dir: &Path) -> Vec<(String, PathBuf)> {
 
 /// Whether a process with this pid exists on this host.
 #[cfg(unix)]
-pub fn alive(pid: i32) -> bool {
+pub(crate) fn alive(pid: i32) -> bool {
     // SAFETY: signal 0 only checks that the process exists.
     pid > 0
         && (unsafe { libc::kill(pid, 0) } == 0
@@ -228,7 +228,7 @@ pub fn alive(pid: i32) -> bool {
 
 /// Elsewhere a claim's owner counts as alive: its claim ends by its heartbeat's silence.
 #[cfg(not(unix))]
-pub fn alive(pid: i32) -> bool {
+pub(crate) fn alive(pid: i32) -> bool {
     pid > 0
 }
 

@@ -10,7 +10,7 @@ use crate::frame::Frame;
 use exr::prelude::*;
 use std::io::Cursor;
 
-pub fn encode(
+pub(crate) fn encode(
     frame: &Frame,
     precision: ExrPrecision,
     meta: &FrameMeta,
@@ -115,7 +115,7 @@ fn rational(fps: f64) -> (i32, u32) {
 
 /// Reads the whole file (EXR has no checksums, so decoding every block is the check); a file
 /// with our fingerprint must also have the job's size and colour channels.
-pub fn inspect(bytes: &[u8], expected: &Expected) -> Existing {
+pub(crate) fn inspect(bytes: &[u8], expected: &Expected) -> Existing {
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

@@ -13,18 +13,18 @@ use crate::transfer::Encoding;
 use glam::DVec3;
 
 /// Key of the PNG text chunk and the EXR attribute that hold the fingerprint.
-pub const KEY: &str = "rayreel:fingerprint";
+pub(crate) const KEY: &str = "rayreel:fingerprint";
 
 /// FNV-1a over 128 bits: simple, stable across machines and releases of Rust.
 #[derive(Clone, Copy)]
-pub struct Hasher(u128);
+pub(crate) struct Hasher(u128);
 
 impl Hasher {
-    pub fn new() -> Hasher {
+    pub(crate) fn new() -> Hasher {
         Hasher(0x6c62272e07bb014262b821756295c58d)
     }
 
-    pub fn write(&mut self, bytes: &[u8]) -> &mut Hasher {
+    pub(crate) fn write(&mut self, bytes: &[u8]) -> &mut Hasher {
         for &b in bytes {
             self.0 ^= u128::from(b);
             self.0 = self.0.wrapping_mul(0x0000000001000000000000000000013B);
@@ -32,7 +32,7 @@ impl Hasher {
         self
     }
 
-    pub fn hex(&self) -> String {
+    pub(crate) fn hex(&self) -> String {
         format!("{:032x}", self.0)
     }
 }
@@ -45,11 +45,11 @@ impl Default for Hasher {
 
 /// Names the encoding below; a change to it (a field added, an order changed) must change
 /// this name, so frames made under the old one count as stale rather than as the same job.
-pub const ENCODING: &str = "rayreel fingerprint v2";
+pub(crate) const ENCODING: &str = "rayreel fingerprint v2";
 
 /// The part shared by every frame of a run: the renderer's version, then the scene, the
 /// render settings and the file content in the canonical encoding of `Canon`.
-pub fn of_run(scene: &Scene, settings: &Settings, format: &FileFormat) -> Hasher {
+pub(crate) fn of_run(scene: &Scene, settings: &Settings, format: &FileFormat) -> Hasher {
     // EXR frames are linear whatever the encoding, which must not make them stale.
     let settings = match format {
         FileFormat::Exr { .. } => &Settings {
@@ -72,7 +72,7 @@ pub fn of_run(scene: &Scene, settings: &Settings, format: &FileFormat) -> Hasher
 /// the lens when open, and the camera at every instant of the shutter's open interval when the
 /// camera moves while it is open (a still camera gives the same image with a shutter or
 /// without, and the same fingerprint).
-pub fn of_frame(run: &Hasher, view: &FrameView) -> String {
+pub(crate) fn of_frame(run: &Hasher, view: &FrameView) -> String {
     let mut h = *run;
     view.frame.canon(&mut h);
     view.pose.canon(&mut h);
@@ -93,7 +93,7 @@ pub fn of_frame(run: &Hasher, view: &FrameView) -> String {
 /// items, an enum as a tag byte then its fields, a struct as its fields in declaration
 /// order. Structs are destructured whole, so a field added without being encoded here does
 /// not compile.
-pub trait Canon {
+pub(crate) trait Canon {
     fn canon(&self, h: &mut Hasher);
 }
 

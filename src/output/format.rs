@@ -36,7 +36,7 @@ pub enum FileFormat {
 
 impl FileFormat {
     /// From the pattern's extension and the format flags.
-    pub fn for_extension(
+    pub(crate) fn for_extension(
         ext: &str,
         sixteen_bit: bool,
         compression: Compression,
@@ -53,7 +53,7 @@ impl FileFormat {
     }
 
     /// A PNG frame's bit depth, colour type (2: RGB, 6: RGBA) and channels per pixel.
-    pub fn png_layout(&self, alpha: bool) -> (u8, u8, u64) {
+    pub(crate) fn png_layout(&self, alpha: bool) -> (u8, u8, u64) {
         let depth = match self {
             FileFormat::Png {
                 sixteen_bit: true, ..
@@ -67,7 +67,7 @@ impl FileFormat {
 /// A frame file extension rayreel does not write.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("unsupported file type `.{0}` (use .png or .exr)")]
-pub struct UnsupportedType(pub String);
+pub(crate) struct UnsupportedType(pub(crate) String);
 
 /// Why a frame could not be turned into the bytes of a file or of the stream.
 #[derive(Debug, thiserror::Error)]

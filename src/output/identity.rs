@@ -13,40 +13,40 @@ use std::path::PathBuf;
 
 /// Where frame files go and in which format.
 #[derive(Debug, Clone)]
-pub struct Files {
-    pub pattern: Pattern,
-    pub format: FileFormat,
+pub(crate) struct Files {
+    pub(crate) pattern: Pattern,
+    pub(crate) format: FileFormat,
 }
 
 impl Files {
     /// The file of frame `n`.
-    pub fn frame_path(&self, n: u64) -> PathBuf {
+    pub(crate) fn frame_path(&self, n: u64) -> PathBuf {
         self.pattern.frame_path(n)
     }
 }
 
 /// What a frame file records about itself.
 #[derive(Debug, Clone)]
-pub struct FrameMeta {
-    pub frame: u64,
-    pub time: f64,
-    pub fps: f64,
-    pub fingerprint: String,
+pub(crate) struct FrameMeta {
+    pub(crate) frame: u64,
+    pub(crate) time: f64,
+    pub(crate) fps: f64,
+    pub(crate) fingerprint: String,
     /// `worldToCamera` and `worldToNDC` (row-major, row vectors) when the frame has a camera.
-    pub matrices: Option<[glam::DMat4; 2]>,
+    pub(crate) matrices: Option<[glam::DMat4; 2]>,
 }
 
 /// What every frame file of a run shares: the hash of the renderer's version, the scene, the
 /// settings and the file format (`fingerprint::of_run`), the frame rate and the image size.
 #[derive(Clone, Copy)]
-pub struct RunIdentity {
+pub(crate) struct RunIdentity {
     run: Hasher,
     fps: f64,
     size: (u32, u32),
 }
 
 impl RunIdentity {
-    pub fn new(seq: &Sequence, format: &FileFormat) -> RunIdentity {
+    pub(crate) fn new(seq: &Sequence, format: &FileFormat) -> RunIdentity {
         let s = &seq.settings;
         RunIdentity {
             run: fingerprint::of_run(&seq.scene, s, format),
@@ -57,12 +57,12 @@ impl RunIdentity {
 
     /// The fingerprint of the frame `view` shows: what its file carries, and what the resume
     /// check compares an existing file with.
-    pub fn fingerprint(&self, view: &FrameView) -> String {
+    pub(crate) fn fingerprint(&self, view: &FrameView) -> String {
         fingerprint::of_frame(&self.run, view)
     }
 
     /// Everything the file of the frame `view` shows records about it.
-    pub fn meta(&self, view: &FrameView) -> FrameMeta {
+    pub(crate) fn meta(&self, view: &FrameView) -> FrameMeta {
         let (width, height) = self.size;
         FrameMeta {
             frame: view.frame,

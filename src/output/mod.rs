@@ -4,24 +4,23 @@
 //! name only once they are complete on disk; `inspect` tells what an existing frame file is,
 //! so a rerun can resume. The modules here depend on their siblings only, never on this one.
 
-pub mod atomic;
-pub mod exr;
-pub mod fingerprint;
-pub mod format;
-pub mod identity;
+pub(crate) mod atomic;
+pub(crate) mod exr;
+pub(crate) mod fingerprint;
+pub(crate) mod format;
+pub(crate) mod identity;
 pub mod png;
-pub mod stream;
+pub(crate) mod stream;
 
-pub use format::{
-    Compression, EncodeError, Existing, Expected, ExrPrecision, FileFormat, UnsupportedType,
-};
-pub use identity::{Files, FrameMeta, RunIdentity};
+pub(crate) use format::{Compression, EncodeError, ExrPrecision};
+pub use format::{Existing, Expected, FileFormat};
+pub(crate) use identity::{Files, FrameMeta, RunIdentity};
 
 use crate::frame::Frame;
 use std::path::Path;
 
 /// The bytes of `frame`'s file in `format`, recording `meta`.
-pub fn encode_file(
+pub(crate) fn encode_file(
     frame: &Frame,
     format: &FileFormat,
     meta: &FrameMeta,
@@ -43,7 +42,7 @@ pub fn encode_file(
 }
 
 /// What the file at `path` is, against what this job would write there.
-pub fn inspect(path: &Path, expected: &Expected) -> Existing {
+pub(crate) fn inspect(path: &Path, expected: &Expected) -> Existing {
     let bytes = match std::fs::read(path) {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Existing::Missing,

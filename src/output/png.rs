@@ -10,7 +10,7 @@ use crate::frame::Frame;
 use crate::transfer::Encoding;
 use png::{ScaledFloat, SourceChromaticities};
 
-pub fn encode(
+pub(crate) fn encode(
     frame: &Frame,
     sixteen_bit: bool,
     compression: Compression,

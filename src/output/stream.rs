@@ -7,14 +7,14 @@ use super::png;
 use crate::frame::Frame;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum StreamFormat {
+pub(crate) enum StreamFormat {
     /// Raw rgb24 (rgb48le with --bit-depth 16), for `ffmpeg -f rawvideo`.
     Raw,
     /// Concatenated PNGs, for `ffmpeg -f image2pipe`.
     Png,
 }
 
-pub fn encode(
+pub(crate) fn encode(
     frame: &Frame,
     format: StreamFormat,
     sixteen_bit: bool,
@@ -32,7 +32,7 @@ pub fn encode(
 
 /// What ffmpeg reads: this stream on its stdin, or the frame files.
 #[derive(Debug, Clone, Copy)]
-pub enum Source<'a> {
+pub(crate) enum Source<'a> {
     Stream {
         format: StreamFormat,
         sixteen_bit: bool,
@@ -47,7 +47,7 @@ pub enum Source<'a> {
 /// with `alpha` make ProRes 4444 instead (any size), which keeps the alpha H.264 cannot
 /// carry. Every word is quoted for a POSIX shell where it needs it, so the line can be
 /// pasted as it is.
-pub fn ffmpeg_command(
+pub(crate) fn ffmpeg_command(
     source: Source,
     alpha: bool,
     (width, height): (u32, u32),
@@ -98,7 +98,7 @@ pub fn ffmpeg_command(
 }
 
 /// The stream's pixels as ffmpeg names them.
-pub fn pix_fmt(sixteen_bit: bool, alpha: bool) -> &'static str {
+pub(crate) fn pix_fmt(sixteen_bit: bool, alpha: bool) -> &'static str {
     match (sixteen_bit, alpha) {
         (false, false) => "rgb24",
         (true, false) => "rgb48le",
@@ -108,11 +108,11 @@ pub fn pix_fmt(sixteen_bit: bool, alpha: bool) -> &'static str {
 }
 
 /// The filter that pads an odd size to the next even one.
-pub const PAD: &str = "pad=ceil(iw/2)*2:ceil(ih/2)*2";
+pub(crate) const PAD: &str = "pad=ceil(iw/2)*2:ceil(ih/2)*2";
 
 /// `w` as one word of a POSIX shell: as it is when it holds only characters no shell treats
 /// specially, otherwise in single quotes (a quote inside becomes `'\''`).
-pub fn shell_quote(w: &str) -> String {
+pub(crate) fn shell_quote(w: &str) -> String {
     let plain = |c: char| c.is_ascii_alphanumeric() || "-_./:=,+%@".contains(c);
     match !w.is_empty() && w.chars().all(plain) {
         true => w.to_string(),

@@ -27,7 +27,7 @@ pub fn nesting_depth(text: &str) -> (usize, usize, usize) {
 
 /// Line and column (1-based) of the first point where the bound of `nesting_depth` passes
 /// `limit`.
-pub fn first_too_deep(text: &str, limit: usize) -> Option<(usize, usize)> {
+pub(crate) fn first_too_deep(text: &str, limit: usize) -> Option<(usize, usize)> {
     let mut s = Scanner::new(text, limit);
     s.run();
     (s.max > limit).then_some(s.max_at)
@@ -227,112 +227,130 @@ impl<'a> Scanner<'a> {
                 self.key = None;
             }
             self.unroll(self.col as isize);
-            let (line, col) = (self.line, self.col);
-            if col == 0 && ch == '%' {
-                self.unroll(-1);
-                self.remove_key();
-                self.key_allowed = false;
-                self.skip_to_break();
-                continue;
-            }
-            if self.document_marker() {
-                self.unroll(-1);
-                self.remove_key();
-                self.key_allowed = false;
-                (0..3).for_each(|_| self.bump());
-                continue;
-            }
-            match ch {
-                '[' | '{' => {
-                    self.save_key();
-                    self.flow += 1;
-                    self.key_allowed = true;
-                    self.bump();
-                    self.note_depth(line, col);
-                }
-                ']' | '}' => {
-                    self.remove_key();
-                    self.flow = self.flow.saturating_sub(1);
-                    self.key_allowed = false;
-                    self.bump();
-                }
-                ',' => {
-                    self.remove_key();
-                    self.key_allowed = true;
-                    self.bump();
-                }
-                '-' if blankz(self.at(1)) => {
-                    self.roll(col);
-                    self.remove_key();
-                    self.key_allowed = true;
-                    self.bump();
-                }
-                '?' if self.flow > 0 || blankz(self.at(1)) => {
-                    self.roll(col);
-                    self.remove_key();
-                    self.key_allowed = self.flow == 0;
-                    self.bump();
-                }
-                ':' if self.flow > 0 || blankz(self.at(1)) => {
-                    let key = if self.flow == 0 {
-                        self.key.take()
-                    } else {
-                        None
-                    };
-                    match key {
-                        Some(k) => {
-                            self.roll(k.col);
-                            self.key_allowed = false;
-                        }
-                        None => {
-                            self.roll(col);
-                            self.key_allowed = self.flow == 0;
-                        }
-                    }
-                    self.bump();
-                }
-                '*' | '&' => {
-                    self.save_key();
-                    self.key_allowed = false;
-                    self.bump();
-                    while self.at(0).is_some_and(anchor_char) {
-                        self.bump();
-                    }
-                }
-                '!' => {
-                    self.save_key();
-                    self.key_allowed = false;
-                    self.bump();
-                    let verbatim = self.at(0) == Some('<');
-                    if verbatim {
-                        self.bump();
-                    }
-                    while self.at(0).is_some_and(|c| tag_char(c, verbatim)) {
-                        self.bump();
-                    }
-                    if verbatim && self.at(0) == Some('>') {
-                        self.bump();
-                    }
-                }
-                '|' | '>' if self.flow == 0 => {
-                    self.remove_key();
-                    self.key_allowed = true;
-                    self.block_scalar();
-                }
-                '\'' | '"' => {
-                    self.save_key();
-                    self.key_allowed = false;
-                    self.quoted(ch);
-                }
-                _ => {
-                    self.save_key();
-                    self.key_allowed = false;
-                    self.plain();
-                }
+            if !self.document_boundary(ch) {
+                self.token(ch);
             }
             if self.i == start {
                 self.bump();
             }
+        }
+    }
+
+    /// A directive (`%YAML`) or a document marker (`---`, `...`) at the start of a line, which
+    /// closes every block collection; false for anything else.
+    fn document_boundary(&mut self, ch: char) -> bool {
+        let directive = self.col == 0 && ch == '%';
+        let marker = !directive && self.document_marker();
+        if !(directive || marker) {
+            return false;
+        }
+        self.unroll(-1);
+        self.remove_key();
+        self.key_allowed = false;
+        match directive {
+            true => self.skip_to_break(),
+            false => (0..3).for_each(|_| self.bump()),
+        }
+        true
+    }
+
+    /// One token starting with `ch`, as libyaml's `fetch_next_token` tells them apart.
+    fn token(&mut self, ch: char) {
+        let (line, col) = (self.line, self.col);
+        match ch {
+            '[' | '{' => {
+                self.save_key();
+                self.flow += 1;
+                self.key_allowed = true;
+                self.bump();
+                self.note_depth(line, col);
+            }
+            ']' | '}' => {
+                self.remove_key();
+                self.flow = self.flow.saturating_sub(1);
+                self.key_allowed = false;
+                self.bump();
+            }
+            ',' => {
+                self.remove_key();
+                self.key_allowed = true;
+                self.bump();
+            }
+            '-' if blankz(self.at(1)) => {
+                self.roll(col);
+                self.remove_key();
+                self.key_allowed = true;
+                self.bump();
+            }
+            '?' if self.flow > 0 || blankz(self.at(1)) => {
+                self.roll(col);
+                self.remove_key();
+                self.key_allowed = self.flow == 0;
+                self.bump();
+            }
+            ':' if self.flow > 0 || blankz(self.at(1)) => self.value(col),
+            '*' | '&' => {
+                self.save_key();
+                self.key_allowed = false;
+                self.bump();
+                while self.at(0).is_some_and(anchor_char) {
+                    self.bump();
+                }
+            }
+            '!' => self.tag(),
+            '|' | '>' if self.flow == 0 => {
+                self.remove_key();
+                self.key_allowed = true;
+                self.block_scalar();
+            }
+            '\'' | '"' => {
+                self.save_key();
+                self.key_allowed = false;
+                self.quoted(ch);
+            }
+            _ => {
+                self.save_key();
+                self.key_allowed = false;
+                self.plain();
+            }
+        }
+    }
+
+    /// A `:` value indicator: a block mapping opens at the saved simple key's column, or at
+    /// this one's when there is none.
+    fn value(&mut self, col: usize) {
+        let key = if self.flow == 0 {
+            self.key.take()
+        } else {
+            None
+        };
+        match key {
+            Some(k) => {
+                self.roll(k.col);
+                self.key_allowed = false;
+            }
+            None => {
+                self.roll(col);
+                self.key_allowed = self.flow == 0;
+            }
+        }
+        self.bump();
+    }
+
+    /// A tag: `!`, `!!str`, `!local`, or verbatim `!<tag:yaml.org,2002:str>`.
+    fn tag(&mut self) {
+        self.save_key();
+        self.key_allowed = false;
+        self.bump();
+        let verbatim = self.at(0) == Some('<');
+        if verbatim {
+            self.bump();
+        }
+        while self.at(0).is_some_and(|c| tag_char(c, verbatim)) {
+            self.bump();
+        }
+        if verbatim && self.at(0) == Some('>') {
+            self.bump();
         }
     }
 

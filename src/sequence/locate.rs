@@ -12,7 +12,7 @@ enum Segment {
 }
 
 /// Position (1-based line, column) of `path`, or of its nearest existing ancestor.
-pub fn locate(text: &str, path: &str) -> (usize, usize) {
+pub(crate) fn locate(text: &str, path: &str) -> (usize, usize) {
     let mut segments = parse_path(path);
     loop {
         if let Some(pos) = find(text, &segments) {

@@ -136,7 +136,7 @@ pub(super) fn got_num(v: f64) -> String {
 /// A number as messages show it: exactly as written when that takes at most 6 significant
 /// digits (`0.35`, `10000000`), otherwise rounded to 6, plain from 1e-4 up to 1e6 and in
 /// exponent form beyond (`1e-300`, never 300 digits).
-pub fn num(v: f64) -> String {
+pub(crate) fn num(v: f64) -> String {
     let exact = format!("{v}");
     let significant = exact
         .trim_start_matches('-')

@@ -11,7 +11,7 @@ mod locate;
 pub mod mesh;
 mod meshes;
 mod messages;
-pub mod raw;
+pub(crate) mod raw;
 mod scene;
 mod settings;
 mod timeline;
@@ -22,13 +22,10 @@ use scene::*;
 use settings::*;
 
 pub use guard::nesting_depth;
-pub use messages::num;
-pub(crate) use settings::output_pattern;
-pub use settings::{
-    DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD, MAX_EXPOSURE,
-    MAX_SAMPLES, escapes, exposure, preset,
-};
-pub use timeline::MAX_FIRST_FRAME;
+pub(crate) use messages::num;
+pub use settings::{DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD};
+pub(crate) use settings::{MAX_SAMPLES, exposure, output_pattern, preset};
+pub(crate) use timeline::MAX_FIRST_FRAME;
 
 use crate::camera::{Camera, Degenerate, Pose};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
@@ -41,51 +38,51 @@ use std::fmt::Display;
 use std::path::{Path, PathBuf};
 
 /// Largest width or height accepted, in pixels.
-pub const MAX_DIMENSION: u64 = 16384;
+pub(crate) const MAX_DIMENSION: u64 = 16384;
 /// Largest width × height: a frame in flight takes 12 bytes a pixel (16 with depth), and a
 /// run keeps a few in flight.
-pub const MAX_PIXELS: u64 = 1 << 26;
+pub(crate) const MAX_PIXELS: u64 = 1 << 26;
 /// Largest number of objects in a scene.
-pub const MAX_OBJECTS: usize = 1_000_000;
+pub(crate) const MAX_OBJECTS: usize = 1_000_000;
 /// Largest `max_depth` accepted.
-pub const MAX_DEPTH: u64 = 10_000;
+pub(crate) const MAX_DEPTH: u64 = 10_000;
 /// Largest shininess accepted (the exponent is shininess / 4).
-pub const MAX_SHININESS: f64 = 1e6;
+pub(crate) const MAX_SHININESS: f64 = 1e6;
 /// Largest colour component or intensity accepted.
-pub const MAX_COLOR: f64 = 1e6;
+pub(crate) const MAX_COLOR: f64 = 1e6;
 /// Largest number of frames a timeline may have.
-pub const MAX_FRAMES: u64 = 10_000_000;
+pub(crate) const MAX_FRAMES: u64 = 10_000_000;
 /// A camera that rolls more than this between consecutive frames is flipping over.
-pub const MAX_ROLL_PER_FRAME_DEGREES: f64 = 60.0;
+pub(crate) const MAX_ROLL_PER_FRAME_DEGREES: f64 = 60.0;
 /// Largest magnitude of any number: lengths get squared, and f64 squares overflow near 1e154.
-pub const MAX_MAGNITUDE: f64 = 1e100;
+pub(crate) const MAX_MAGNITUDE: f64 = 1e100;
 /// Smallest sphere radius: its square must stay a normal f64.
-pub const MIN_RADIUS: f64 = 1e-100;
+pub(crate) const MIN_RADIUS: f64 = 1e-100;
 /// Largest frames per second accepted.
-pub const MAX_FPS: f64 = 1000.0;
+pub(crate) const MAX_FPS: f64 = 1000.0;
 /// Largest sequence file accepted, in bytes; larger files are refused before they are read.
 /// serde_yaml holds a whole document as events before checking it, 35 to 100 bytes of memory
 /// per byte of YAML (a 16 MiB scene takes 0.6 GB), so this bounds what a file can allocate.
-pub const MAX_FILE_BYTES: u64 = 16 << 20;
+pub(crate) const MAX_FILE_BYTES: u64 = 16 << 20;
 /// Collections may nest this deep for sure (a sequence file needs 6 levels): a linear pre-scan
 /// (`guard`) refuses text before parsing when its bound, at most twice the real depth plus one,
 /// passes twice this plus one. libyaml takes time quadratic in the depth of `[[[[…`.
-pub const MAX_NESTING: usize = 32;
+pub(crate) const MAX_NESTING: usize = 32;
 
 /// A validated sequence file: everything needed to render any of its frames.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sequence {
     /// The file's stem, used in the default output pattern.
-    pub name: String,
+    pub(crate) name: String,
     pub scene: Scene,
     pub timeline: Timeline,
     pub settings: Settings,
     /// Output pattern; a run of `#` stands for the zero-padded frame number.
-    pub output: String,
+    pub(crate) output: String,
     /// The file's `render.quality`, if any (draft also halves the resolution).
     pub quality: Option<Quality>,
     /// What is valid but probably not meant (keys after the end of the film), one line each.
-    pub warnings: Vec<String>,
+    pub(crate) warnings: Vec<String>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -131,12 +128,12 @@ pub fn load(file: &Path) -> Result<Sequence, LoadError> {
 /// `load`, except that a file whose every field is valid but whose camera cannot be built at
 /// some key or frame still loads: that error comes back beside the sequence, for `preview` to
 /// draw the path it describes.
-pub fn load_drawable(file: &Path) -> Result<(Sequence, Option<LoadError>), LoadError> {
+pub(crate) fn load_drawable(file: &Path) -> Result<(Sequence, Option<LoadError>), LoadError> {
     parse_drawable(file, &read(file)?)
 }
 
 /// Whether `file` names standard input (`-`).
-pub fn is_stdin(file: &Path) -> bool {
+pub(crate) fn is_stdin(file: &Path) -> bool {
     file.as_os_str() == "-"
 }
 
@@ -198,7 +195,10 @@ pub fn parse(file: &Path, text: &str) -> Result<Sequence, LoadError> {
 }
 
 /// `load_drawable` for text already in memory.
-pub fn parse_drawable(file: &Path, text: &str) -> Result<(Sequence, Option<LoadError>), LoadError> {
+pub(crate) fn parse_drawable(
+    file: &Path,
+    text: &str,
+) -> Result<(Sequence, Option<LoadError>), LoadError> {
     // Editors on Windows start UTF-8 files with a byte-order mark; libyaml would take it for
     // the start of a second document.
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
@@ -244,6 +244,36 @@ pub fn parse_drawable(file: &Path, text: &str) -> Result<(Sequence, Option<LoadE
 /// The sequence, and the first key or frame whose camera cannot be built (see `load_drawable`).
 fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Option<Invalid>)> {
     let settings = render_settings(&raw.render)?;
+    let (scene, mut warnings) = scene_of(&raw, base)?;
+    let camera = raw.camera.as_ref().map(camera_key).transpose()?;
+    let loaded = match (&raw.timeline, camera) {
+        (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
+        (None, Some(key)) => timeline::Loaded {
+            timeline: Timeline::still(key),
+            warnings: Vec::new(),
+            problem: None,
+        },
+        (None, None) => return invalid("camera", "a sequence needs a `camera:` or a `timeline:`"),
+    };
+    let timeline = loaded.timeline;
+    let seq = Sequence {
+        name: name.to_string(),
+        scene,
+        settings,
+        output: output_of(raw.output, name, &timeline)?,
+        quality: raw.render.quality,
+        timeline,
+        warnings: {
+            warnings.extend(loaded.warnings);
+            warnings
+        },
+    };
+    Ok((seq, loaded.problem))
+}
+
+/// The background, materials, objects (meshes read from below `base`) and lights, checked in
+/// that order, with the meshes' warnings.
+fn scene_of(raw: &raw::Sequence, base: &Path) -> Check<(Scene, Vec<String>)> {
     let background = color(
         "render.background",
         raw.render.background.unwrap_or_default(),
@@ -268,58 +298,40 @@ fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Opt
         let path = format!("objects[{i}]");
         objects.push(object(&path, o, &names, &mut materials, &mut meshes)?);
     }
-    let (meshes, mut warnings) = meshes.finish();
+    let (meshes, warnings) = meshes.finish();
     let mut lights = Vec::new();
     for (i, l) in raw.lights.iter().enumerate() {
         lights.push(light(&format!("lights[{i}]"), l)?);
     }
-    let camera = raw.camera.as_ref().map(camera_key).transpose()?;
-    let loaded = match (&raw.timeline, camera) {
-        (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
-        (None, Some(key)) => timeline::Loaded {
-            timeline: Timeline::still(key),
-            warnings: Vec::new(),
-            problem: None,
-        },
-        (None, None) => return invalid("camera", "a sequence needs a `camera:` or a `timeline:`"),
+    let scene = Scene {
+        objects,
+        meshes,
+        materials,
+        lights,
+        background,
     };
-    let timeline = loaded.timeline;
-    let seq = Sequence {
-        name: name.to_string(),
-        scene: Scene {
-            objects,
-            meshes,
-            materials,
-            lights,
-            background,
-        },
-        settings,
-        output: match raw.output {
-            Some(o) => {
-                let pattern = output_pattern(&o, timeline.last_frame());
-                let pattern = pattern.or_else(|m| invalid("output", m))?;
-                if pattern.is_single() && timeline.frame_count > 1 {
-                    return invalid(
-                        "output",
-                        format!(
-                            "output pattern `{o}` has no `#` run for the frame number, but the sequence has {} frames (e.g. frame_####.png)",
-                            timeline.frame_count
-                        ),
-                    );
-                }
-                contained("output", &o)?;
-                o
-            }
-            None => format!("frames/{name}/frame_####.png"),
-        },
-        quality: raw.render.quality,
-        timeline,
-        warnings: {
-            warnings.extend(loaded.warnings);
-            warnings
-        },
+    Ok((scene, warnings))
+}
+
+/// `output:` checked against the timeline (a one-file name holds one frame), or the default
+/// `frames/NAME/frame_####.png`.
+fn output_of(output: Option<String>, name: &str, timeline: &Timeline) -> Check<String> {
+    let Some(o) = output else {
+        return Ok(format!("frames/{name}/frame_####.png"));
     };
-    Ok((seq, loaded.problem))
+    let pattern = output_pattern(&o, timeline.last_frame());
+    let pattern = pattern.or_else(|m| invalid("output", m))?;
+    if pattern.is_single() && timeline.frame_count > 1 {
+        return invalid(
+            "output",
+            format!(
+                "output pattern `{o}` has no `#` run for the frame number, but the sequence has {} frames (e.g. frame_####.png)",
+                timeline.frame_count
+            ),
+        );
+    }
+    contained("output", &o)?;
+    Ok(o)
 }
 
 /// `camera:` as a key at time 0: a still camera, or what the first keyframe starts from.

@@ -40,28 +40,7 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
         s.samples = check("render.samples", samples(n))?;
     }
     if let Some(a) = &r.adaptive {
-        let threshold = a.threshold.unwrap_or(DEFAULT_THRESHOLD);
-        in_range(
-            "render.adaptive.threshold",
-            threshold,
-            0.0,
-            1.0,
-            "in (0, 1]",
-        )?;
-        if threshold == 0.0 {
-            return invalid(
-                "render.adaptive.threshold",
-                "must be greater than 0 (got 0)",
-            );
-        }
-        let max_samples = check(
-            "render.adaptive.max_samples",
-            samples(a.max_samples.unwrap_or(DEFAULT_MAX_SAMPLES)),
-        )?;
-        s.adaptive = Some(Adaptive {
-            threshold: threshold as f32,
-            max_samples,
-        });
+        s.adaptive = Some(adaptive(a)?);
     }
     if let Some(a) = s.adaptive
         && a.max_samples <= s.samples
@@ -78,11 +57,35 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
     Ok(s)
 }
 
+/// `render.adaptive`: its threshold in (0, 1] and its most samples, or their defaults.
+fn adaptive(a: &raw::Adaptive) -> Check<Adaptive> {
+    let threshold = a.threshold.unwrap_or(DEFAULT_THRESHOLD);
+    in_range(
+        "render.adaptive.threshold",
+        threshold,
+        0.0,
+        1.0,
+        "in (0, 1]",
+    )?;
+    if threshold == 0.0 {
+        return invalid(
+            "render.adaptive.threshold",
+            "must be greater than 0 (got 0)",
+        );
+    }
+    let max_samples = samples(a.max_samples.unwrap_or(DEFAULT_MAX_SAMPLES))
+        .or_else(|m| invalid("render.adaptive.max_samples", m))?;
+    Ok(Adaptive {
+        threshold: threshold as f32,
+        max_samples,
+    })
+}
+
 /// Largest |render.exposure|, in stops: 2^64 times the brightest colour still fits an f32.
-pub const MAX_EXPOSURE: f64 = 64.0;
+pub(crate) const MAX_EXPOSURE: f64 = 64.0;
 
 /// An exposure in stops, as the file and `--exposure` may give it.
-pub fn exposure(v: f64) -> Result<f64, String> {
+pub(crate) fn exposure(v: f64) -> Result<f64, String> {
     if v.is_finite() && v.abs() <= MAX_EXPOSURE {
         Ok(v)
     } else {
@@ -134,10 +137,10 @@ pub const DEFAULT_THRESHOLD: f64 = 0.03;
 pub const DEFAULT_MAX_SAMPLES: u64 = 32;
 
 /// Largest samples per pixel accepted.
-pub const MAX_SAMPLES: u64 = 4096;
+pub(crate) const MAX_SAMPLES: u64 = 4096;
 
 /// What a quality preset sets; explicit settings at the same or a later level override it.
-pub fn preset(s: &mut Settings, q: Quality) {
+pub(crate) fn preset(s: &mut Settings, q: Quality) {
     let (samples, adaptive, depth) = match q {
         Quality::Draft => (1, None, 2),
         Quality::Preview => (4, None, 3),
@@ -264,7 +267,7 @@ pub(super) fn contained(path: &str, output: &str) -> Check<()> {
 /// Where the directory of a relative `output` really is when it is not below the current
 /// directory (a symbolic link on the way leads elsewhere, or leads nowhere); `None` when it is
 /// inside. The part that does not exist yet will be created as plain directories.
-pub fn escapes(output: &str) -> Option<PathBuf> {
+pub(crate) fn escapes(output: &str) -> Option<PathBuf> {
     let cwd = std::fs::canonicalize(".").ok()?;
     let mut existing = Path::new(output).parent().unwrap_or(Path::new(""));
     let mut missing = Vec::new();

@@ -12,15 +12,15 @@ use crate::timeline::{
 };
 
 /// Largest `timeline.first_frame`: frame numbers stay below 2^53, exact in f64.
-pub const MAX_FIRST_FRAME: u64 = 1 << 50;
+pub(crate) const MAX_FIRST_FRAME: u64 = 1 << 50;
 use glam::DVec3;
 
 /// A timeline that loaded, with what is worth a warning and, separately, the first problem
 /// that makes some frame's camera impossible (a file that `preview` can still draw).
 pub(super) struct Loaded {
-    pub timeline: Timeline,
-    pub warnings: Vec<String>,
-    pub problem: Option<Invalid>,
+    pub(crate) timeline: Timeline,
+    pub(crate) warnings: Vec<String>,
+    pub(crate) problem: Option<Invalid>,
 }
 
 pub(super) fn timeline(

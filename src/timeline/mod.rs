@@ -69,15 +69,15 @@ pub struct Orbit {
     pub radius: f64,
     pub height: f64,
     /// Degrees; 0 puts the camera on the +z side of the centre, 90 on the +x side.
-    pub start_angle: f64,
-    pub turns: f64,
-    pub duration: f64,
+    pub(crate) start_angle: f64,
+    pub(crate) turns: f64,
+    pub(crate) duration: f64,
     pub look_at: DVec3,
-    pub up: DVec3,
-    pub fov: f64,
-    pub aperture: f64,
+    pub(crate) up: DVec3,
+    pub(crate) fov: f64,
+    pub(crate) aperture: f64,
     /// None: the distance to look_at.
-    pub focus_distance: Option<f64>,
+    pub(crate) focus_distance: Option<f64>,
 }
 
 /// A keyframed move with its tracks built once, so `camera_at` only evaluates.
@@ -88,7 +88,7 @@ pub struct Keyed {
     pub interpolation: Interpolation,
     pub speed: Speed,
     /// When the camera is at each key: its time, or under constant speed the time it gets there.
-    pub passes: Vec<f64>,
+    pub(crate) passes: Vec<f64>,
     /// Position, look_at, up, fov (as x).
     tracks: [Track; 4],
     /// Aperture, and the focus distance when some key gives one (as x).
@@ -118,11 +118,11 @@ pub struct Timeline {
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Clock {
     /// The number of the first frame (`timeline.first_frame`, `--first-frame`; default 0).
-    pub first_frame: u64,
+    pub(crate) first_frame: u64,
     /// `timeline.fps` as written when it is a fraction num/den.
-    pub fraction: Option<(u64, u64)>,
+    pub(crate) fraction: Option<(u64, u64)>,
     /// The length the file gives (`timeline.duration`, the orbit's, the last key's time).
-    pub duration: Option<f64>,
+    pub(crate) duration: Option<f64>,
 }
 
 /// A key may end this much of a frame after the frame that shows it (rounding in t × fps).
@@ -130,7 +130,7 @@ const FRAME_SLACK: f64 = 1e-6;
 
 /// Frames of a keyframed timeline that ends on its last key: 0 … ceil(t_last·fps − 1e-6),
 /// which is round(t_last·fps) when the key falls on a frame.
-pub fn frames_to(t_last: f64, fps: f64) -> f64 {
+pub(crate) fn frames_to(t_last: f64, fps: f64) -> f64 {
     (t_last * fps - FRAME_SLACK).ceil().max(0.0) + 1.0
 }
 
@@ -226,7 +226,7 @@ fn constant_passes(times: &[f64], reach: &[f64]) -> Vec<f64> {
 
 impl Timeline {
     /// A single frame of a still camera (its key's time is ignored).
-    pub fn still(key: Key) -> Timeline {
+    pub(crate) fn still(key: Key) -> Timeline {
         let key = Key { time: 0.0, ..key };
         Timeline {
             fps: 24.0,
@@ -250,17 +250,17 @@ impl Timeline {
     }
 
     /// The number of the first frame.
-    pub fn first_frame(&self) -> u64 {
+    pub(crate) fn first_frame(&self) -> u64 {
         self.clock.first_frame
     }
 
     /// The number of the last frame.
-    pub fn last_frame(&self) -> u64 {
+    pub(crate) fn last_frame(&self) -> u64 {
         self.clock.first_frame + (self.frame_count - 1)
     }
 
     /// `24` or `23.976`, or the fraction as written (`24000/1001`), as ffmpeg's `-r` takes it.
-    pub fn fps_text(&self) -> String {
+    pub(crate) fn fps_text(&self) -> String {
         match self.clock.fraction {
             Some((num, den)) => format!("{num}/{den}"),
             None => format!("{}", self.fps),
@@ -279,7 +279,7 @@ impl Timeline {
     }
 
     /// The camera and its lens at time t.
-    pub fn view_at(&self, t: f64) -> (Pose, Lens) {
+    pub(crate) fn view_at(&self, t: f64) -> (Pose, Lens) {
         let pose = self.camera_at(t);
         let lens = match &self.path {
             Path::Orbit(o) => Lens {
@@ -295,7 +295,7 @@ impl Timeline {
 
     /// The camera's speed along its path at time t, in scene units per second: at a key time
     /// the rate of the segment ending there for the last key, starting there otherwise.
-    pub fn speed_at(&self, t: f64) -> f64 {
+    pub(crate) fn speed_at(&self, t: f64) -> f64 {
         match &self.path {
             Path::Orbit(o) => {
                 let circle = std::f64::consts::TAU * o.radius * o.turns.abs();

@@ -11,7 +11,7 @@
 use glam::DVec3;
 
 /// Equal parts of [0, 1] on which the arc length is integrated.
-pub const PARTS: usize = 16;
+pub(crate) const PARTS: usize = 16;
 
 /// 8-point Gauss–Legendre nodes (on [−1, 1], positive half) and weights.
 const NODES: [f64; 4] = [
@@ -32,13 +32,13 @@ const TURN_BACK: f64 = 1e-12;
 
 /// One curved segment from `p1` to `p2`.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Curve {
-    pub p1: DVec3,
-    pub p2: DVec3,
-    pub t1: DVec3,
-    pub t2: DVec3,
+pub(crate) struct Curve {
+    pub(crate) p1: DVec3,
+    pub(crate) p2: DVec3,
+    pub(crate) t1: DVec3,
+    pub(crate) t2: DVec3,
     /// Arc length from x = 0 to x = j/PARTS, j = 0..=PARTS.
-    pub parts: [f64; PARTS + 1],
+    pub(crate) parts: [f64; PARTS + 1],
 }
 
 fn unit(d: DVec3) -> Option<DVec3> {
@@ -47,7 +47,7 @@ fn unit(d: DVec3) -> Option<DVec3> {
 }
 
 /// T1, the tangent at p1 of the segment p1 → p2, given the key before p1 (if any).
-pub fn start_tangent(p0: Option<DVec3>, p1: DVec3, p2: DVec3) -> DVec3 {
+pub(crate) fn start_tangent(p0: Option<DVec3>, p1: DVec3, p2: DVec3) -> DVec3 {
     let v = p2 - p1;
     match (p0.and_then(|p0| unit(p1 - p0)), unit(v)) {
         (Some(u_hat), Some(v_hat)) => {
@@ -59,7 +59,7 @@ pub fn start_tangent(p0: Option<DVec3>, p1: DVec3, p2: DVec3) -> DVec3 {
 }
 
 /// T2, the tangent at p2 of the segment p1 → p2, given the key after p2 (if any).
-pub fn end_tangent(p1: DVec3, p2: DVec3, p3: Option<DVec3>) -> DVec3 {
+pub(crate) fn end_tangent(p1: DVec3, p2: DVec3, p3: Option<DVec3>) -> DVec3 {
     let v = p2 - p1;
     match (unit(v), p3.and_then(|p3| unit(p3 - p2))) {
         (Some(v_hat), Some(w_hat)) => {
@@ -72,7 +72,7 @@ pub fn end_tangent(p1: DVec3, p2: DVec3, p3: Option<DVec3>) -> DVec3 {
 
 /// Whether a track arriving from `prev` at `at` leaves straight back towards where it came
 /// from: its tangent there is zero, so it must stop rather than reverse at full speed.
-pub fn turns_back(prev: DVec3, at: DVec3, next: DVec3) -> bool {
+pub(crate) fn turns_back(prev: DVec3, at: DVec3, next: DVec3) -> bool {
     match (unit(at - prev), unit(next - at)) {
         (Some(u), Some(v)) => (u + v).length() < TURN_BACK,
         _ => false,
@@ -80,7 +80,7 @@ pub fn turns_back(prev: DVec3, at: DVec3, next: DVec3) -> bool {
 }
 
 impl Curve {
-    pub fn new(p1: DVec3, p2: DVec3, t1: DVec3, t2: DVec3) -> Curve {
+    pub(crate) fn new(p1: DVec3, p2: DVec3, t1: DVec3, t2: DVec3) -> Curve {
         let mut c = Curve {
             p1,
             p2,
@@ -95,11 +95,11 @@ impl Curve {
         c
     }
 
-    pub fn length(&self) -> f64 {
+    pub(crate) fn length(&self) -> f64 {
         self.parts[PARTS]
     }
 
-    pub fn point(&self, x: f64) -> DVec3 {
+    pub(crate) fn point(&self, x: f64) -> DVec3 {
         let (x2, x3) = (x * x, x * x * x);
         let h00 = 2.0 * x3 - 3.0 * x2 + 1.0;
         let h10 = x3 - 2.0 * x2 + x;
@@ -108,7 +108,7 @@ impl Curve {
         self.p1 * h00 + self.t1 * h10 + self.p2 * h01 + self.t2 * h11
     }
 
-    pub fn derivative(&self, x: f64) -> DVec3 {
+    pub(crate) fn derivative(&self, x: f64) -> DVec3 {
         let x2 = x * x;
         let d00 = 6.0 * x2 - 6.0 * x;
         let d10 = 3.0 * x2 - 4.0 * x + 1.0;
@@ -128,7 +128,7 @@ impl Curve {
     }
 
     /// The point at arc length `s` from p1, for s in [0, length].
-    pub fn at_length(&self, s: f64) -> DVec3 {
+    pub(crate) fn at_length(&self, s: f64) -> DVec3 {
         if s <= 0.0 {
             return self.p1;
         }

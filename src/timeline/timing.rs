@@ -17,7 +17,7 @@
 const MAX_RATE: f64 = 1e300;
 
 /// δ = length / duration, finite whatever the inputs.
-pub fn mean_rate(length: f64, duration: f64) -> f64 {
+pub(crate) fn mean_rate(length: f64, duration: f64) -> f64 {
     if length <= 0.0 {
         0.0
     } else if duration > 0.0 {
@@ -28,7 +28,7 @@ pub fn mean_rate(length: f64, duration: f64) -> f64 {
 }
 
 /// The rate ds/dt at every key (see the module doc).
-pub fn slopes(times: &[f64], lengths: &[f64], stops: &[bool]) -> Vec<f64> {
+pub(crate) fn slopes(times: &[f64], lengths: &[f64], stops: &[bool]) -> Vec<f64> {
     let n = times.len();
     let delta: Vec<f64> = (0..n - 1)
         .map(|k| mean_rate(lengths[k], times[k + 1] - times[k]))
@@ -59,7 +59,7 @@ pub fn slopes(times: &[f64], lengths: &[f64], stops: &[bool]) -> Vec<f64> {
 
 /// Arc length covered and its rate ds/dt at fraction u ∈ [0, 1] of a segment of duration h and
 /// length `length`, with rates m0 and m1 at its ends.
-pub fn hermite(u: f64, h: f64, length: f64, m0: f64, m1: f64) -> (f64, f64) {
+pub(crate) fn hermite(u: f64, h: f64, length: f64, m0: f64, m1: f64) -> (f64, f64) {
     let (u2, u3) = (u * u, u * u * u);
     let h01 = 3.0 * u2 - 2.0 * u3;
     let h10 = u3 - 2.0 * u2 + u;
@@ -74,7 +74,7 @@ pub fn hermite(u: f64, h: f64, length: f64, m0: f64, m1: f64) -> (f64, f64) {
 
 /// Linear timing: the fraction e(u) of the segment covered and de/du. A stop at either end
 /// eases that end (u², u(2 − u), or u²(3 − 2u) for both), so the camera does halt there.
-pub fn eased(u: f64, stop_start: bool, stop_end: bool) -> (f64, f64) {
+pub(crate) fn eased(u: f64, stop_start: bool, stop_end: bool) -> (f64, f64) {
     match (stop_start, stop_end) {
         (false, false) => (u, 1.0),
         (true, false) => (u * u, 2.0 * u),

@@ -7,7 +7,7 @@ use glam::DVec3;
 
 /// How a track moves along its shape in time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Timing {
+pub(crate) enum Timing {
     /// Piecewise linear in time, eased next to stops (`interpolation: linear`).
     Linear,
     /// Monotone C1 cubic arc length through the keys (see `timing`).
@@ -27,7 +27,7 @@ enum Segment {
 }
 
 #[derive(Debug, Clone, PartialEq)]
-pub struct Track {
+pub(crate) struct Track {
     times: Vec<f64>,
     values: Vec<DVec3>,
     segments: Vec<Segment>,
@@ -43,7 +43,7 @@ pub struct Track {
 
 impl Track {
     /// `curved` picks centripetal Catmull-Rom segments over straight ones.
-    pub fn new(
+    pub(crate) fn new(
         times: Vec<f64>,
         values: Vec<DVec3>,
         stops: &[bool],
@@ -81,13 +81,13 @@ impl Track {
     }
 
     /// Arc length from the first key to each key.
-    pub fn reach(&self) -> &[f64] {
+    pub(crate) fn reach(&self) -> &[f64] {
         &self.reach
     }
 
     /// The value at time t and the rate ds/dt along the shape; still before the first key
     /// and after the last, exactly the key's value at each key time.
-    pub fn at(&self, t: f64) -> (DVec3, f64) {
+    pub(crate) fn at(&self, t: f64) -> (DVec3, f64) {
         let last = self.times.len() - 1;
         if last == 0 || t.is_nan() || t < self.times[0] || t > self.times[last] {
             let held = if t > self.times[0] { last } else { 0 };

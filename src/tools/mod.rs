@@ -2,7 +2,7 @@
 //! contact sheet, `measure` weighs speed against accuracy on one frame, `bench` times this
 //! machine. Each reads a `Sequence` and calls the tracer like any other caller.
 
-pub mod bench;
+pub(crate) mod bench;
 pub mod measure;
 pub mod meshgen;
 pub mod preview;

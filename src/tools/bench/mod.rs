@@ -26,7 +26,7 @@ const TALK_POV: &str = include_str!("../../../sequences/bench/talk_orbit.pov");
 
 /// Why a benchmark could not run.
 #[derive(Debug, thiserror::Error)]
-pub enum BenchError {
+pub(crate) enum BenchError {
     #[error(transparent)]
     Load(#[from] LoadError),
     #[error(transparent)]
@@ -49,10 +49,10 @@ pub enum BenchError {
 
 /// Median, min and max of some seconds.
 #[derive(Debug, Clone, Copy)]
-pub struct Spread {
-    pub median: f64,
-    pub min: f64,
-    pub max: f64,
+pub(crate) struct Spread {
+    pub(crate) median: f64,
+    pub(crate) min: f64,
+    pub(crate) max: f64,
 }
 
 fn timing(mut t: Vec<f64>) -> Spread {
@@ -177,7 +177,7 @@ fn sequence_run(
 }
 
 /// A field of `n` spheres on a plane, under one light, seen from above at an angle.
-pub fn field(n: usize) -> String {
+pub(crate) fn field(n: usize) -> String {
     let side = (n as f64).sqrt().ceil() as usize;
     let spacing = 20.0 / side as f64;
     let mut s = String::from(
@@ -203,32 +203,20 @@ pub fn field(n: usize) -> String {
     s
 }
 
-pub struct Options {
-    pub runs: usize,
-    pub only: Option<String>,
+pub(crate) struct Options {
+    pub(crate) runs: usize,
+    pub(crate) only: Option<String>,
     /// Smaller sizes and fields, for tests of the command itself.
-    pub quick: bool,
+    pub(crate) quick: bool,
 }
 
 /// Runs the benchmarks, printing lines as they finish.
 pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), BenchError> {
     let want = |name: &str| o.only.as_deref().is_none_or(|w| w == name);
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let (w, h) = if o.quick { (320, 180) } else { (1920, 1080) };
-    out(&format!(
-        "rayreel bench: {} ({cores} threads), {}",
-        cpu_model(),
-        today()
-    ));
-    out(&format!(
-        "each figure: median (min-max) of {} runs; reproduce with the command after it",
-        o.runs
-    ));
-    let loadavg = std::fs::read_to_string("/proc/loadavg").ok();
-    if let Some(w) = loadavg.as_deref().and_then(|l| busy_warning(l, cores)) {
-        out(&w);
-    }
-    let talk = load(TALK, (w, h))?;
+    let size = if o.quick { (320, 180) } else { (1920, 1080) };
+    header(o, cores, out);
+    let talk = load(TALK, size)?;
     let world = World::new(talk.scene.clone());
     let cmd = |name: &str| {
         format!(
@@ -243,82 +231,17 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), BenchError> {
         mesh::meshes(o, out, &cmd("mesh"))?;
     }
     if want("render") || want("threads") {
-        let (t2, frame) = render_only(&world, &talk, cores, o.runs)?;
-        let rays = frame.rays as f64;
-        out(&format!(
-            "talk {w}x{h} 1 spp depth 3, render only, {cores} threads: {:.1} frames/s ({:.1}-{:.1}), {:.1} M rays/s, {:.2} rays/pixel   [{}]",
-            1.0 / t2.median,
-            1.0 / t2.max,
-            1.0 / t2.min,
-            rays / t2.median / 1e6,
-            rays / (w * h) as f64,
-            cmd("render")
-        ));
-        if want("threads") && cores > 1 {
-            let (t1, _) = render_only(&world, &talk, 1, o.runs)?;
-            let speedup = t1.median / t2.median;
-            let busy = match speedup < 1.0 {
-                true => " (below 1x: other work had the cores; this says nothing of scaling)",
-                false => "",
-            };
-            out(&format!(
-                "  1 thread: {:.1} frames/s; {cores} threads over 1: {speedup:.2}x{busy}   [{}]",
-                1.0 / t1.median,
-                cmd("threads")
-            ));
-        }
+        let threads = want("threads").then(|| cmd("threads"));
+        render_figures(o, (&talk, &world), out, &cmd("render"), threads.as_deref())?;
     }
     if want("reflections") {
-        let flat = load(&TALK.replace("reflection: 0.5", "reflection: 0"), (w, h))?;
-        let (tf, f) = render_only(&World::new(flat.scene.clone()), &flat, cores, o.runs)?;
-        let (tr, r) = render_only(&world, &talk, cores, o.runs)?;
-        out(&format!(
-            "talk without reflections: {:.1} frames/s ({} rays) vs with: {:.1} frames/s ({} rays): {:.2}x cheaper   [{}]",
-            1.0 / tf.median,
-            f.rays,
-            1.0 / tr.median,
-            r.rays,
-            tr.median / tf.median,
-            cmd("reflections")
-        ));
+        reflections(o, (&talk, &world), out, &cmd("reflections"))?;
     }
     if want("glass") {
-        glass(o, (w, h), &talk, &world, out, &cmd("glass"))?;
+        glass(o, size, &talk, &world, out, &cmd("glass"))?;
     }
     if want("sequence") {
-        let frames = if o.quick { 4 } else { 12 };
-        let orbit = load(TALK_ORBIT, (w, h))?;
-        let dir = std::env::temp_dir().join(format!("rayreel-bench-{}", std::process::id()));
-        std::fs::create_dir_all(&dir)?;
-        let raw = timing(
-            (0..o.runs)
-                .map(|_| sequence_run(&orbit, frames, cores, None))
-                .collect::<Result<_, _>>()?,
-        );
-        let png = timing(
-            (0..o.runs)
-                .map(|_| {
-                    let _ = std::fs::remove_dir_all(&dir);
-                    std::fs::create_dir_all(&dir)?;
-                    sequence_run(&orbit, frames, cores, Some(&dir))
-                })
-                .collect::<Result<_, _>>()?,
-        );
-        let _ = std::fs::remove_dir_all(&dir);
-        let orbit_world = World::new(orbit.scene.clone());
-        let render = timing(
-            (0..o.runs)
-                .map(|_| render_frames(&orbit_world, &orbit, frames, cores))
-                .collect::<Result<_, _>>()?,
-        );
-        let f = frames as f64;
-        out(&format!(
-            "talk orbit {frames} frames {w}x{h}: render only {:.1} frames/s, raw stream {:.1} frames/s, PNG files (fast deflate, written and synced) {:.1} frames/s   [{}]",
-            f / render.median,
-            f / raw.median,
-            f / png.median,
-            cmd("sequence")
-        ));
+        sequence_figures(o, size, out, &cmd("sequence"))?;
     }
     if want("scaling") {
         scaling(o, out, &cmd("scaling"))?;
@@ -326,6 +249,125 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), BenchError> {
     if want("povray") {
         povray(o, out, &cmd("povray"))?;
     }
+    Ok(())
+}
+
+/// The machine, the date, how figures are made, and a warning when the machine is busy.
+fn header(o: &Options, cores: usize, out: &mut dyn FnMut(&str)) {
+    out(&format!(
+        "rayreel bench: {} ({cores} threads), {}",
+        cpu_model(),
+        today()
+    ));
+    out(&format!(
+        "each figure: median (min-max) of {} runs; reproduce with the command after it",
+        o.runs
+    ));
+    let loadavg = std::fs::read_to_string("/proc/loadavg").ok();
+    if let Some(w) = loadavg.as_deref().and_then(|l| busy_warning(l, cores)) {
+        out(&w);
+    }
+}
+
+/// The talk's render speed on every core, and (`threads` given) on one.
+fn render_figures(
+    o: &Options,
+    (talk, world): (&Sequence, &World),
+    out: &mut dyn FnMut(&str),
+    cmd: &str,
+    threads: Option<&str>,
+) -> Result<(), BenchError> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let (w, h) = (talk.settings.width, talk.settings.height);
+    let (t2, frame) = render_only(world, talk, cores, o.runs)?;
+    let rays = frame.rays as f64;
+    out(&format!(
+        "talk {w}x{h} 1 spp depth 3, render only, {cores} threads: {:.1} frames/s ({:.1}-{:.1}), {:.1} M rays/s, {:.2} rays/pixel   [{cmd}]",
+        1.0 / t2.median,
+        1.0 / t2.max,
+        1.0 / t2.min,
+        rays / t2.median / 1e6,
+        rays / (w * h) as f64,
+    ));
+    let Some(cmd) = threads.filter(|_| cores > 1) else {
+        return Ok(());
+    };
+    let (t1, _) = render_only(world, talk, 1, o.runs)?;
+    let speedup = t1.median / t2.median;
+    let busy = match speedup < 1.0 {
+        true => " (below 1x: other work had the cores; this says nothing of scaling)",
+        false => "",
+    };
+    out(&format!(
+        "  1 thread: {:.1} frames/s; {cores} threads over 1: {speedup:.2}x{busy}   [{cmd}]",
+        1.0 / t1.median,
+    ));
+    Ok(())
+}
+
+/// What reflections cost: the talk with every reflection 0 against the talk.
+fn reflections(
+    o: &Options,
+    (talk, world): (&Sequence, &World),
+    out: &mut dyn FnMut(&str),
+    cmd: &str,
+) -> Result<(), BenchError> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let size = (talk.settings.width, talk.settings.height);
+    let flat = load(&TALK.replace("reflection: 0.5", "reflection: 0"), size)?;
+    let (tf, f) = render_only(&World::new(flat.scene.clone()), &flat, cores, o.runs)?;
+    let (tr, r) = render_only(world, talk, cores, o.runs)?;
+    out(&format!(
+        "talk without reflections: {:.1} frames/s ({} rays) vs with: {:.1} frames/s ({} rays): {:.2}x cheaper   [{cmd}]",
+        1.0 / tf.median,
+        f.rays,
+        1.0 / tr.median,
+        r.rays,
+        tr.median / tf.median,
+    ));
+    Ok(())
+}
+
+/// The orbit's frames rendered only, to a raw stream, and to PNG files.
+fn sequence_figures(
+    o: &Options,
+    (w, h): (u32, u32),
+    out: &mut dyn FnMut(&str),
+    cmd: &str,
+) -> Result<(), BenchError> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let frames = if o.quick { 4 } else { 12 };
+    let orbit = load(TALK_ORBIT, (w, h))?;
+    let dir = std::env::temp_dir().join(format!("rayreel-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let raw = timing(
+        (0..o.runs)
+            .map(|_| sequence_run(&orbit, frames, cores, None))
+            .collect::<Result<_, _>>()?,
+    );
+    let png = timing(
+        (0..o.runs)
+            .map(|_| {
+                let _ = std::fs::remove_dir_all(&dir);
+                std::fs::create_dir_all(&dir)?;
+                sequence_run(&orbit, frames, cores, Some(&dir))
+            })
+            .collect::<Result<_, _>>()?,
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    let orbit_world = World::new(orbit.scene.clone());
+    let render = timing(
+        (0..o.runs)
+            .map(|_| render_frames(&orbit_world, &orbit, frames, cores))
+            .collect::<Result<_, _>>()?,
+    );
+    let f = frames as f64;
+    out(&format!(
+        "talk orbit {frames} frames {w}x{h}: render only {:.1} frames/s, raw stream {:.1} frames/s, PNG files (fast deflate, written and synced) {:.1} frames/s   [{cmd}]",
+        f / render.median,
+        f / raw.median,
+        f / png.median,
+    ));
     Ok(())
 }
 

@@ -18,23 +18,23 @@ mod report;
 /// Samples per pixel of the reference (a jittered 32×32 grid) and its max_depth: with the
 /// reflection coefficients users give (≤ 1) and the 16th bounce weighted at most by
 /// r^15, deeper paths add nothing visible in practice; `convergence` reports the check.
-pub const REFERENCE_SAMPLES: u32 = 1024;
-pub const REFERENCE_DEPTH: u32 = 16;
+pub(crate) const REFERENCE_SAMPLES: u32 = 1024;
+pub(crate) const REFERENCE_DEPTH: u32 = 16;
 /// The reference where paths branch (glass): a tree of depth d traces up to 2^d − 1 rays a
 /// sample, so a 16×16 grid at depth 12 costs about what the plain reference does.
-pub const TREE_REFERENCE_SAMPLES: u32 = 256;
-pub const TREE_REFERENCE_DEPTH: u32 = 12;
+pub(crate) const TREE_REFERENCE_SAMPLES: u32 = 256;
+pub(crate) const TREE_REFERENCE_DEPTH: u32 = 12;
 /// The reference is computed in f64 whatever the file says: it is what f32 is measured against.
-pub const REFERENCE_PRECISION: Precision = Precision::F64;
+pub(crate) const REFERENCE_PRECISION: Precision = Precision::F64;
 /// Issue 19's target for f32: at most this share of pixels off by more than 2 levels from the
 /// f64 image of the same settings.
-pub const F32_TARGET_OFF2: f64 = 0.0005;
+pub(crate) const F32_TARGET_OFF2: f64 = 0.0005;
 
 /// How far an image is from the reference, in 8-bit levels.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Distance {
     pub rmse: f64,
-    pub psnr: f64,
+    pub(crate) psnr: f64,
     pub max: u8,
     /// Share of pixels with some channel off by more than one level.
     pub off: f64,
@@ -76,25 +76,23 @@ pub fn compare(a: &[u8], b: &[u8]) -> Distance {
 
 /// One rung of the ladder.
 #[derive(Debug, Clone)]
-pub struct Row {
-    pub group: &'static str,
-    pub label: String,
-    pub settings: Settings,
-    /// Whether the image is rendered at half size and upscaled (the draft preset).
-    pub half: bool,
-    pub samples_per_pixel: f64,
-    pub seconds: [f64; 3],
-    pub error: Distance,
+pub(crate) struct Row {
+    pub(crate) group: &'static str,
+    pub(crate) label: String,
+    pub(crate) settings: Settings,
+    pub(crate) samples_per_pixel: f64,
+    pub(crate) seconds: [f64; 3],
+    pub(crate) error: Distance,
     /// Precision rows only: against the f64 render of the same settings.
-    pub versus_f64: Option<Versus>,
+    pub(crate) versus_f64: Option<Versus>,
 }
 
 /// A precision row against the f64 row of the same settings (the f64 row against itself).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Versus {
+pub(crate) struct Versus {
     /// The median over rounds of that round's f64 time over this row's time.
-    pub speedup: f64,
-    pub error: Distance,
+    pub(crate) speedup: f64,
+    pub(crate) error: Distance,
 }
 
 /// Renders frame `n` with `settings` in place of the sequence's (building the geometry; the
@@ -169,7 +167,7 @@ pub fn ladder(base: &Settings) -> Vec<(&'static str, String, Settings, bool)> {
 }
 
 /// The file's own settings in f64 and in f32 (both, whatever the file says), f64 first.
-pub fn precisions(base: &Settings) -> [(String, Settings); 2] {
+pub(crate) fn precisions(base: &Settings) -> [(String, Settings); 2] {
     [Precision::F64, Precision::F32].map(|precision| {
         let s = Settings {
             precision,
@@ -209,7 +207,6 @@ fn precision_rows(
             group: "precision",
             label,
             settings,
-            half: false,
             samples_per_pixel: out[i].1,
             seconds: spread(times[i].clone()),
             error: compare(&out[i].0, ref_image),
@@ -269,20 +266,20 @@ fn spread(mut t: Vec<f64>) -> [f64; 3] {
     [t[t.len() / 2], t[0], t[t.len() - 1]]
 }
 
-pub struct Report {
+pub(crate) struct Report {
     /// The encoding of the 8-bit values the errors are measured on: the sequence's, so the
     /// figures are the differences a viewer of its frames sees.
-    pub encoding: Encoding,
+    pub(crate) encoding: Encoding,
     /// Samples per pixel and max_depth of the reference.
-    pub reference: (u32, u32),
-    pub reference_seconds: f64,
+    pub(crate) reference: (u32, u32),
+    pub(crate) reference_seconds: f64,
     /// Error of a reference with half the samples, against the reference.
-    pub convergence: Distance,
-    pub rows: Vec<Row>,
+    pub(crate) convergence: Distance,
+    pub(crate) rows: Vec<Row>,
 }
 
 /// Renders the reference and the ladder; `progress` hears each rung as it finishes.
-pub fn measure(
+pub(crate) fn measure(
     seq: &Sequence,
     n: u64,
     runs: usize,
@@ -311,7 +308,6 @@ pub fn measure(
             group,
             label,
             settings,
-            half,
             samples_per_pixel: spp,
             seconds: spread(times),
             error,

@@ -6,7 +6,7 @@ use crate::tracer::Precision;
 use std::fmt::Write as _;
 
 impl Report {
-    pub fn table(&self) -> String {
+    pub(crate) fn table(&self) -> String {
         let mut s = format!(
             "errors on the 8-bit {} values of each frame (render.encoding)\n",
             self.encoding.name()
@@ -115,7 +115,7 @@ impl Report {
             .collect()
     }
 
-    pub fn csv(&self) -> String {
+    pub(crate) fn csv(&self) -> String {
         let records = self.records();
         let header: Vec<&str> = records
             .first()
@@ -134,7 +134,7 @@ impl Report {
         s
     }
 
-    pub fn json(&self) -> String {
+    pub(crate) fn json(&self) -> String {
         let rows: Vec<String> = self
             .records()
             .iter()

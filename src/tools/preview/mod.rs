@@ -70,9 +70,9 @@ pub enum PreviewError {
 }
 
 /// Default number of contact-sheet tiles.
-pub const DEFAULT_TILES: u64 = 12;
+pub(crate) const DEFAULT_TILES: u64 = 12;
 /// Most tiles one sheet holds: beyond this the picture stops being a glance.
-pub const MAX_TILES: u64 = 400;
+pub(crate) const MAX_TILES: u64 = 400;
 /// Default tile width in pixels; the height follows the sequence's aspect ratio.
 pub const TILE_WIDTH: u32 = 256;
 
@@ -101,7 +101,7 @@ pub fn tile_height(seq: &Sequence, tile_w: u32) -> u32 {
 }
 
 /// Encodes `img` as PNG and writes it atomically (a complete file or none) to `path`.
-pub fn write_png(path: &Path, img: &RgbImage) -> Result<(), PreviewError> {
+pub(crate) fn write_png(path: &Path, img: &RgbImage) -> Result<(), PreviewError> {
     let mut bytes = std::io::Cursor::new(Vec::new());
     let path_buf = || path.to_path_buf();
     img.write_to(&mut bytes, image::ImageFormat::Png)

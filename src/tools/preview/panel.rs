@@ -34,17 +34,17 @@ pub struct Panel {
     pub width: u32,
     pub height: u32,
     /// World axis shown left to right (0 = x, 1 = y, 2 = z).
-    pub across: usize,
+    pub(crate) across: usize,
     /// World axis shown vertically.
-    pub down: usize,
+    pub(crate) down: usize,
     /// Whether `down` grows downwards on screen (the top view's z) rather than up (side's y).
-    pub flipped: bool,
+    pub(crate) flipped: bool,
     /// Pixels per scene unit, the same on both axes.
     pub scale: f64,
     /// World (across, down) coordinates at the panel's centre.
-    pub centre: (f64, f64),
+    pub(crate) centre: (f64, f64),
     /// Where the slice plane for planes and giant spheres cuts the third axis.
-    pub slice: f64,
+    pub(crate) slice: f64,
 }
 
 impl Panel {

@@ -21,8 +21,8 @@ pub(super) const LABEL_STRIP: u32 = 24;
 pub struct SheetLayout {
     pub columns: u32,
     pub rows: u32,
-    pub tile_w: u32,
-    pub tile_h: u32,
+    pub(crate) tile_w: u32,
+    pub(crate) tile_h: u32,
     pub width: u32,
     pub height: u32,
 }

@@ -11,7 +11,7 @@ use crate::sequence::Sequence;
 use crate::timeline::{Ease, Path as TimelinePath};
 
 /// Height of the panel in pixels.
-pub const HEIGHT: u32 = 220;
+pub(crate) const HEIGHT: u32 = 220;
 /// Inner padding: room for the axis labels and the key numbers.
 const PAD_X: f64 = 56.0;
 const PAD_TOP: f64 = 26.0;
@@ -41,7 +41,13 @@ impl Axes {
 type KeyMark = (usize, f64, f64, bool);
 
 /// Draws the panel into `rect` for the sampled frames (`bad` ones in red).
-pub fn draw(c: &mut Canvas, rect: Rect, seq: &Sequence, samples: &[(u64, Pose)], bad: &[bool]) {
+pub(crate) fn draw(
+    c: &mut Canvas,
+    rect: Rect,
+    seq: &Sequence,
+    samples: &[(u64, Pose)],
+    bad: &[bool],
+) {
     let t = &seq.timeline;
     let times: Vec<f64> = samples.iter().map(|(n, _)| t.time_of(*n)).collect();
     let speeds: Vec<f64> = times.iter().map(|&s| t.speed_at(s)).collect();

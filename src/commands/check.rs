@@ -1,0 +1,267 @@
+//! `rayreel check`: a sequence's one-screen summary and what a job of it may cost.
+
+use super::{Error, out, print_warnings, shown};
+use crate::cli::CheckArgs;
+use crate::console::printable;
+use crate::scene::{Light, Scene, Shape};
+use crate::sequence::{self, Sequence};
+use crate::settings::Settings;
+use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
+
+pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
+    let seq = sequence::load(&args.file)?;
+    print_warnings(&seq);
+    let (cost, warning) = cost(&seq, seq.timeline.frame_count);
+    if let Some(w) = warning {
+        eprintln!("{w}");
+    }
+    out(&format!(
+        "{}  cost:       {cost}\n",
+        summary(&shown(&args.file), &seq)
+    ))
+}
+
+/// Jobs above this many rays are called enormous: about 9 hours at `RAYS_PER_SECOND`.
+pub(crate) const ENORMOUS_RAYS: f64 = 1e12;
+/// Rays a second of the 2-core machine measured under Performance in the README.
+const RAYS_PER_SECOND: f64 = 3e7;
+
+/// An upper bound on the rays one frame traces: pixels × samples (adaptive: its maximum) ×
+/// (1 + lights that cast shadows) × max_depth, since each surface a path visits sends one ray
+/// on and at most one shadow ray per light.
+pub(crate) fn rays_per_frame(seq: &Sequence) -> f64 {
+    let s = &seq.settings;
+    let samples = s.adaptive.map_or(s.samples, |a| a.max_samples);
+    let shadows = seq
+        .scene
+        .lights
+        .iter()
+        .filter(|l| !matches!(l, Light::Ambient { .. }))
+        .count();
+    f64::from(s.width)
+        * f64::from(s.height)
+        * f64::from(samples)
+        * (1 + shadows) as f64
+        * f64::from(s.max_depth)
+}
+
+/// `up to 2.76e9 rays a frame, 3.98e11 for 144 frames (…)`, and a warning for an enormous
+/// job.
+pub(crate) fn cost(seq: &Sequence, frames: u64) -> (String, Option<String>) {
+    let frame = rays_per_frame(seq);
+    let total = frame * frames as f64;
+    let line = format!(
+        "up to {frame:.2e} rays a frame, {total:.2e} for {frames} frame{} (pixels × samples × (1 + lights) × max_depth)",
+        if frames == 1 { "" } else { "s" }
+    );
+    let warning = (total > ENORMOUS_RAYS).then(|| {
+        format!(
+            "warning: this job may trace up to {total:.2e} rays, about {} at {RAYS_PER_SECOND:.0e} rays/s; check the size, render.samples and render.max_depth (Ctrl-C or SIGTERM stops a render within about a second)",
+            duration(total / RAYS_PER_SECOND)
+        )
+    });
+    (line, warning)
+}
+
+/// `3.2 hours`, `41 years`.
+fn duration(seconds: f64) -> String {
+    let units = [
+        (31_557_600.0, "years"),
+        (86_400.0, "days"),
+        (3600.0, "hours"),
+        (60.0, "minutes"),
+    ];
+    match units.iter().find(|(unit, _)| seconds >= 2.0 * unit) {
+        Some((unit, name)) => format!("{:.0} {name}", seconds / unit),
+        None => format!("{seconds:.0} seconds"),
+    }
+}
+
+/// The one-screen description `rayreel check` prints.
+pub(crate) fn summary(file: &str, seq: &Sequence) -> String {
+    let (scene, s) = (&seq.scene, &seq.settings);
+    format!(
+        "{file}: ok\n  objects:    {}\n{}  materials:  {}\n  lights:     {}\n  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}  output:     {}\n",
+        objects(scene),
+        super::meshes::summary(scene),
+        scene.materials.len(),
+        lights(scene),
+        s.width,
+        s.height,
+        s.max_depth,
+        picture(s),
+        frames(&seq.timeline),
+        timing(&seq.timeline),
+        film(seq),
+        printable(&seq.output)
+    )
+}
+
+/// The `objects:` line: `4 (3 spheres, 1 plane)`, with `, 2 meshes` when there are any.
+fn objects(scene: &Scene) -> String {
+    let spheres = scene
+        .objects
+        .iter()
+        .filter(|o| matches!(o.shape, Shape::Sphere { .. }))
+        .count();
+    let placed = scene
+        .objects
+        .iter()
+        .filter(|o| matches!(o.shape, Shape::Mesh { .. }))
+        .count();
+    let planes = scene.objects.len() - spheres - placed;
+    format!(
+        "{} ({}, {}{})",
+        scene.objects.len(),
+        noun(spheres as f64, "sphere"),
+        noun(planes as f64, "plane"),
+        match placed {
+            0 => String::new(),
+            1 => ", 1 mesh".to_string(),
+            n => format!(", {n} meshes"),
+        }
+    )
+}
+
+/// The `lights:` line: `2 (1 point, 1 ambient)`, or `0 (none)`.
+fn lights(scene: &Scene) -> String {
+    let mut kinds = [0usize; 4];
+    for l in &scene.lights {
+        kinds[match l {
+            Light::Point { .. } => 0,
+            Light::Directional { .. } => 1,
+            Light::Spot { .. } => 2,
+            Light::Ambient { .. } => 3,
+        }] += 1;
+    }
+    let light_list: Vec<String> = ["point", "directional", "spot", "ambient"]
+        .iter()
+        .zip(kinds)
+        .filter(|(_, n)| *n > 0)
+        .map(|(k, n)| format!("{n} {k}"))
+        .collect();
+    let list = match light_list.is_empty() {
+        true => "none".to_string(),
+        false => light_list.join(", "),
+    };
+    format!("{} ({list})", scene.lights.len())
+}
+
+/// The `frames:` line: `144 at 24 fps (6 s), orbit of radius 3 (1 turn)`.
+fn frames(t: &Timeline) -> String {
+    let camera = match &t.path {
+        TimelinePath::Orbit(o) => format!(
+            "orbit of radius {} ({})",
+            sequence::num(o.radius),
+            noun(o.turns, "turn")
+        ),
+        TimelinePath::Keys(k) if k.keys.len() == 1 => "still camera".to_string(),
+        TimelinePath::Keys(k) => format!(
+            "{} keyframes, {:?} interpolation",
+            k.keys.len(),
+            k.interpolation
+        )
+        .to_lowercase(),
+    };
+    format!(
+        "{} at {} fps ({} s{}), {camera}",
+        t.frame_count,
+        t.fps_text(),
+        sequence::num(t.clock.duration.unwrap_or(t.frame_count as f64 / t.fps)),
+        match t.first_frame() {
+            0 => String::new(),
+            first => format!(", frames {first}-{}", t.last_frame()),
+        },
+    )
+}
+
+/// The `picture:` line: sampling, encoding, exposure and alpha, what decides how frames look.
+fn picture(s: &Settings) -> String {
+    let sampling = match s.adaptive {
+        Some(a) => format!(
+            "{} to {} samples (adaptive, threshold {})",
+            s.samples, a.max_samples, a.threshold
+        ),
+        None => noun(f64::from(s.samples), "sample"),
+    };
+    let alpha = if s.alpha { ", alpha" } else { "" };
+    format!(
+        "{sampling}, {}, exposure {}{alpha}",
+        s.encoding.name(),
+        s.exposure
+    )
+}
+
+/// `3 spheres`, `1 plane`, `1.5 turns`.
+fn noun(n: f64, what: &str) -> String {
+    format!(
+        "{} {what}{}",
+        sequence::num(n),
+        if n == 1.0 { "" } else { "s" }
+    )
+}
+
+/// The `film:` line when frames are more than a pinhole's instant: a shutter, an open lens.
+fn film(seq: &Sequence) -> String {
+    let widest = match &seq.timeline.path {
+        TimelinePath::Orbit(o) => o.aperture,
+        TimelinePath::Keys(k) => k.keys.iter().map(|k| k.aperture).fold(0.0, f64::max),
+    };
+    let mut parts = Vec::new();
+    if let Some(s) = seq.settings.shutter {
+        parts.push(format!(
+            "{}° shutter (open {:.4} s a frame, offset {})",
+            sequence::num(s.angle),
+            s.angle / 360.0 / seq.timeline.fps,
+            sequence::num(s.offset)
+        ));
+    }
+    if widest > 0.0 {
+        parts.push(format!("lens aperture up to {}", sequence::num(widest)));
+    }
+    if parts.is_empty() {
+        return String::new();
+    }
+    format!("  film:       {}\n", parts.join(", "))
+}
+
+/// The `timing:` line of a keyframed move: stops, or what constant speed does to key times.
+fn timing(t: &Timeline) -> String {
+    let TimelinePath::Keys(k) = &t.path else {
+        return String::new();
+    };
+    let inner = 1..k.keys.len().saturating_sub(1);
+    let line = match k.speed {
+        Speed::Constant => {
+            let passed: Vec<String> = inner
+                .clone()
+                .map(|i| format!("{i} at {:.3} s", k.passes[i]))
+                .collect();
+            let rate = t.speed_at(k.passes[0]);
+            let ignored = match passed.is_empty() {
+                true => String::new(),
+                false => format!(
+                    "; the times of keyframes between the first and last are ignored: passed {}",
+                    passed.join(", ")
+                ),
+            };
+            format!("constant speed, {rate:.4} units/s{ignored}")
+        }
+        Speed::Keys if k.keys.len() < 2 => return String::new(),
+        Speed::Keys => {
+            let stops: Vec<String> = (0..k.keys.len())
+                .filter(|&i| k.keys[i].ease == Ease::Stop)
+                .map(|i| i.to_string())
+                .collect();
+            match stops.is_empty() {
+                true => "each keyframe at its time".to_string(),
+                false => format!(
+                    "each keyframe at its time, stopping at keyframe{} {}",
+                    if stops.len() == 1 { "" } else { "s" },
+                    stops.join(", ")
+                ),
+            }
+        }
+    };
+    format!("  timing:     {line}\n")
+}

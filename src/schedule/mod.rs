@@ -1,0 +1,231 @@
+//! The frame scheduler: renders the selected frames on a rayon pool, a bounded window of frames
+//! at a time (rows of each frame are parallel too), so both cores stay busy from the first
+//! frame to the last, the first file appears early, and memory does not grow with the length
+//! of the sequence or with a slow reader. Workers only compute (render, encode); this thread
+//! does all I/O: atomic file writes as frames finish, the stream strictly in frame order.
+
+//!
+//! `work` is what a worker does with one frame (render, encode); `delivery` is what this
+//! thread does with a finished one (claims, atomic writes, progress); `stream` keeps the
+//! stream's order and writes it on a thread of its own.
+
+mod delivery;
+mod stream;
+mod work;
+
+use crate::claim::Claims;
+use crate::frame::Frame;
+use crate::output::{EncodeError, Files, RunIdentity, stream::StreamFormat};
+use crate::progress::Progress;
+use crate::sequence::Sequence;
+use crate::settings::Settings;
+use crate::shutter::Exposure;
+use crate::tracer::{self, World};
+use delivery::Delivery;
+use std::io::Write;
+use std::sync::atomic::AtomicBool;
+use std::sync::{Arc, mpsc};
+use std::time::Duration;
+use work::{Produced, produce};
+
+/// One frame of a run: its number, and whether its file must be written (with a stream, frames
+/// whose files are up to date are still rendered for the stream but not rewritten).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Task {
+    pub(crate) frame: u64,
+    pub(crate) write_file: bool,
+}
+
+/// What a run renders and where it goes: the frames (tasks), the file sink, the stream, the
+/// threads and, when processes cooperate, their claims.
+pub(crate) struct Batch {
+    pub(crate) sequence: Arc<Sequence>,
+    /// Ascending frame numbers, each inside the timeline.
+    pub(crate) tasks: Vec<Task>,
+    pub(crate) files: Option<Files>,
+    pub(crate) stream: Option<(StreamFormat, bool)>,
+    /// Where the stream goes: stdout for users, a sink for benchmarks.
+    pub(crate) stream_out: Option<Box<dyn Write + Send>>,
+    pub(crate) threads: usize,
+    /// Cooperate with other processes through claim files (files only, no stream).
+    pub(crate) claims: Option<Arc<Claims>>,
+}
+
+/// How a run ended when nothing failed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) enum Outcome {
+    /// Every task done, except `held`: frames another live process has claimed.
+    Complete { written: usize, held: Vec<u64> },
+    /// Ctrl-C or SIGTERM: frames in flight were cancelled, nothing new was started; frames
+    /// finished before stay written (and streamed).
+    Interrupted { written: usize, streamed: usize },
+    /// The stream's reader closed the pipe; the remaining work was cancelled.
+    ReaderClosed { streamed: usize },
+}
+
+/// Frames rendered in parallel beyond one per thread: enough to hide encoding and writing
+/// behind rendering, few enough that memory stays a handful of frames.
+const EXTRA_IN_FLIGHT: usize = 2;
+
+/// Why a run stopped short of its frames (the command maps every one to exit 1).
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error("cannot start {threads} worker threads: {source}")]
+    Workers {
+        threads: usize,
+        source: rayon::ThreadPoolBuildError,
+    },
+    #[error("frame {frame}: {source}")]
+    Camera {
+        frame: u64,
+        source: crate::shutter::NoCamera,
+    },
+    #[error("{}: cannot encode: {source}", path.display())]
+    Encode {
+        path: std::path::PathBuf,
+        source: EncodeError,
+    },
+    #[error("frame {frame}: cannot encode the stream: {source}")]
+    EncodeStream { frame: u64, source: EncodeError },
+    #[error("{}: cannot write: {source}", path.display())]
+    Write {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: cannot create claim: {source}", path.display())]
+    Claim {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    #[error("stdout: cannot write the stream: {0}")]
+    Stream(std::io::Error),
+    #[error("worker lost: {0}")]
+    WorkerLost(mpsc::RecvTimeoutError),
+}
+
+/// How often the run looks at signals, claims and workers.
+const TICK: Duration = Duration::from_millis(100);
+
+/// How long a stopping run waits for frames in flight to give up (they check at every pixel,
+/// so this only matters while one is being encoded) before it leaves them behind.
+const STOP_GRACE: Duration = Duration::from_secs(2);
+
+pub(crate) fn run(batch: Batch, progress: &mut Progress) -> Result<Outcome, RunError> {
+    run_on(&worker_pool(batch.threads)?, batch, progress)
+}
+
+/// The worker threads of a run; an error when the machine cannot start that many.
+pub(crate) fn worker_pool(threads: usize) -> Result<rayon::ThreadPool, RunError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .thread_name(|i| format!("rayreel-{i}"))
+        .build()
+        .map_err(|source| RunError::Workers { threads, source })
+}
+
+/// `run` on threads already started (claim mode runs several passes on them).
+pub(crate) fn run_on(
+    pool: &rayon::ThreadPool,
+    mut batch: Batch,
+    progress: &mut Progress,
+) -> Result<Outcome, RunError> {
+    return_frame_buffers_to_the_os();
+    let window = match batch.stream {
+        // A stream has its order to keep: one frame rendering (on every thread) while the one
+        // before is written keeps memory to two frames whatever the reader does.
+        Some(_) => 2,
+        None => batch.threads + EXTRA_IN_FLIGHT,
+    };
+    let (tx, rx) = mpsc::channel::<(u64, Produced)>();
+    let out = batch
+        .stream_out
+        .take()
+        .unwrap_or_else(|| Box::new(std::io::stdout()));
+    let mut d = Delivery::new(&batch, progress, out);
+    let spawn = spawner(pool, &batch, &d.cancel, tx);
+    let mut pending = batch.tasks.iter().copied();
+    let mut in_flight = 0;
+    loop {
+        d.notice_signal(in_flight);
+        // Frames rendered but held for the stream's order count too: a slow frame must not
+        // let the others run ahead without bound.
+        while d.stop.is_none() && in_flight + d.held_for_order() < window {
+            let Some(task) = pending.next() else { break };
+            if d.claim(task.frame) {
+                spawn(task);
+                in_flight += 1;
+            }
+        }
+        if in_flight == 0 || d.signalled.is_some_and(|t| t.elapsed() > STOP_GRACE) {
+            break;
+        }
+        d.heartbeat();
+        match rx.recv_timeout(TICK) {
+            Ok((frame, done)) => {
+                in_flight -= 1;
+                d.deliver(frame, done);
+            }
+            Err(mpsc::RecvTimeoutError::Timeout) => {}
+            Err(e) => return Err(RunError::WorkerLost(e)),
+        }
+    }
+    d.finish()
+}
+
+/// Starts one frame on the pool; its result comes back through `tx`.
+fn spawner<'a>(
+    pool: &'a rayon::ThreadPool,
+    batch: &Batch,
+    cancel: &Arc<AtomicBool>,
+    tx: mpsc::Sender<(u64, Produced)>,
+) -> impl Fn(Task) + 'a {
+    let seq = Arc::clone(&batch.sequence);
+    let world = Arc::new(World::new(seq.scene.clone()));
+    let files = batch.files.clone();
+    let identity = files.as_ref().map(|f| RunIdentity::new(&seq, &f.format));
+    let (stream, cancel) = (batch.stream, Arc::clone(cancel));
+    move |task| {
+        let (tx, seq, world, cancel) = (
+            tx.clone(),
+            Arc::clone(&seq),
+            Arc::clone(&world),
+            Arc::clone(&cancel),
+        );
+        let files = files.clone();
+        pool.spawn(move || {
+            let files = files.as_ref().zip(identity.as_ref());
+            let _ = tx.send((
+                task.frame,
+                produce(&world, &seq, task, files, stream, &cancel),
+            ));
+        });
+    }
+}
+
+/// Renders frame `n` of the sequence (building its geometry; a run builds it once).
+pub fn render_frame(seq: &Sequence, n: u64) -> Result<Frame, RunError> {
+    render_with(&World::new(seq.scene.clone()), seq, n, &seq.settings)
+}
+
+/// Renders frame `n` in `world` (built once from the sequence's scene) with `settings`.
+pub(crate) fn render_with(
+    world: &World,
+    seq: &Sequence,
+    n: u64,
+    settings: &Settings,
+) -> Result<Frame, RunError> {
+    let exposure = Exposure::of_frame(&seq.timeline, settings.shutter, n)
+        .map_err(|source| RunError::Camera { frame: n, source })?;
+    Ok(tracer::render(world, &exposure, settings, n))
+}
+
+/// Frame buffers are large and short-lived. glibc raises its mmap threshold after the first
+/// ones are freed and then keeps such blocks in fragmented arenas, so peak memory creeps up
+/// with the length of a sequence; a fixed threshold maps and unmaps each buffer instead.
+fn return_frame_buffers_to_the_os() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only tunes the allocator; called before the worker threads allocate.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 256 * 1024);
+    }
+}
