@@ -40,7 +40,7 @@ pub struct Render {
     pub alpha: Option<bool>,
     pub shutter: Option<f64>,
     pub shutter_offset: Option<f64>,
-    pub precision: Option<crate::tracer::Precision>,
+    pub precision: Option<crate::settings::Precision>,
 }
 
 #[derive(Debug, Deserialize)]

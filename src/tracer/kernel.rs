@@ -137,14 +137,17 @@ impl Kernel {
         if self.supported() {
             use crate::lanes::Pair;
             use crate::lanes::x86::{F32x8, F32x16, F64x4, F64x8};
-            // SAFETY: `supported` said the CPU has the feature the entry point enables.
             match (self, precision) {
+                // SAFETY: `supported` said the CPU has AVX2, the feature `avx2` enables.
                 (Kernel::Avx2, Precision::F64) => return unsafe { x86::avx2::<Pair<F64x4>>(job) },
+                // SAFETY: as above, AVX2 is present.
                 (Kernel::Avx2, Precision::F32) => return unsafe { x86::avx2::<Pair<F32x8>>(job) },
                 (Kernel::Avx512, Precision::F64) => {
+                    // SAFETY: `supported` said the CPU has AVX-512F, the feature `avx512` enables.
                     return unsafe { x86::avx512::<Pair<F64x8>>(job) };
                 }
                 (Kernel::Avx512, Precision::F32) => {
+                    // SAFETY: as above, AVX-512F is present.
                     return unsafe { x86::avx512::<Pair<F32x16>>(job) };
                 }
                 (Kernel::Scalar, _) => {}
@@ -195,11 +198,15 @@ mod x86 {
     use super::{Done, Job};
     use crate::lanes::Lanes;
 
+    /// # Safety
+    /// The CPU must have AVX2.
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn avx2<V: Lanes>(job: Job) -> Done {
         job.run::<V>()
     }
 
+    /// # Safety
+    /// The CPU must have AVX-512F.
     #[target_feature(enable = "avx512f")]
     pub(super) unsafe fn avx512<V: Lanes>(job: Job) -> Done {
         job.run::<V>()
