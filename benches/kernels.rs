@@ -44,6 +44,7 @@ fn kernels(c: &mut Criterion) {
     let plane = Shape::Plane {
         point: DVec3::new(0.0, -0.7, 0.0),
         normal: DVec3::Y,
+        u_axis: None,
     };
     for (name, shape) in [
         ("sphere", sphere),

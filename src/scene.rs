@@ -29,6 +29,48 @@ pub struct Material {
     pub ior: f64,
     /// Schlick's Fresnel term replaces `reflection` and scales `transmission`.
     pub fresnel: bool,
+    /// A texture that replaces `diffuse` at every hit (docs/spec/texture.md).
+    pub diffuse_map: Option<Texture>,
+    /// A texture that replaces `ambient` at every hit.
+    pub ambient_map: Option<Texture>,
+}
+
+/// A colour that varies over a surface: `{ checker: … }` or `{ image: … }`.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Texture {
+    /// A solid checker in world space: cell (i, j, k) = ⌊p/size⌋ takes `colors[(i+j+k) mod 2]`.
+    Checker { size: f64, colors: [DVec3; 2] },
+    /// An image at the hit's texture coordinates times `scale`, repeated.
+    Image { image: Arc<Image>, scale: DVec2 },
+}
+
+/// A texture image: linear RGB texels, level 0 the file's pixels, each further level half
+/// the size (rounded up) down to 1×1 (docs/spec/texture.md).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Image {
+    /// The file, as the sequence names it after resolving against its folder.
+    pub file: PathBuf,
+    pub levels: Vec<Level>,
+    /// FNV-1a 64 of the file's bytes and its decoding: the fingerprint covers the content.
+    pub digest: u64,
+    /// Bytes the file had, and seconds the read and the pyramid took, for `check`.
+    pub bytes: u64,
+    pub load_seconds: f64,
+}
+
+/// One mip level: `texels[row * width + col]`, row 0 at the top of the image (v = 1).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Level {
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<[f32; 3]>,
+}
+
+impl Material {
+    /// Whether a texture replaces a colour of this material.
+    pub fn textured(&self) -> bool {
+        self.diffuse_map.is_some() || self.ambient_map.is_some()
+    }
 }
 
 impl Material {
@@ -50,10 +92,12 @@ pub enum Shape {
         center: DVec3,
         radius: f64,
     },
-    /// `normal` is unit length; the plane is every x with (x − point)·normal = 0.
+    /// `normal` is unit length; the plane is every x with (x − point)·normal = 0. `u_axis`
+    /// is the YAML's, when given: the direction an image's u runs along (docs/spec/texture.md).
     Plane {
         point: DVec3,
         normal: DVec3,
+        u_axis: Option<DVec3>,
     },
     /// One placement of `Scene::meshes[mesh]` (a file used twice is loaded once).
     Mesh {
@@ -258,9 +302,14 @@ impl Shape {
                 center: center - by,
                 radius,
             },
-            Shape::Plane { point, normal } => Shape::Plane {
+            Shape::Plane {
+                point,
+                normal,
+                u_axis,
+            } => Shape::Plane {
                 point: closest_to_origin(point - by, normal),
                 normal,
+                u_axis,
             },
             Shape::Mesh {
                 mesh,

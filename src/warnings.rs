@@ -112,7 +112,7 @@ pub(crate) fn inside_objects(seq: &Sequence, positions: &[DVec3]) -> Vec<(String
                     .collect(),
                 format!("the camera is inside objects[{i}] (sphere)"),
             ),
-            Shape::Plane { point, normal } => (
+            Shape::Plane { point, normal, .. } => (
                 positions
                     .iter()
                     .map(|&p| (p - point).dot(normal) < 0.0)

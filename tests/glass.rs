@@ -132,6 +132,8 @@ fn glass(reflection: f64, transmission: f64, ior: f64, fresnel: bool) -> Materia
         transmission: DVec3::splat(transmission),
         ior,
         fresnel,
+        diffuse_map: None,
+        ambient_map: None,
     }
 }
 

@@ -163,7 +163,7 @@ fn rays(rng: &mut Rng, world: &World, n: usize) -> Vec<Ray> {
                 }
             }
             // Parallel to a plane, above it or in it.
-            (Shape::Plane { point, normal }, 4) => {
+            (Shape::Plane { point, normal, .. }, 4) => {
                 let d = normal.cross(rng.unit()).normalize();
                 let lift = *rng.pick(&[0.0, 1e-9, 0.3]);
                 Ray {
@@ -173,7 +173,7 @@ fn rays(rng: &mut Rng, world: &World, n: usize) -> Vec<Ray> {
                 }
             }
             // Starting on a plane.
-            (Shape::Plane { point, normal }, 5) => Ray {
+            (Shape::Plane { point, normal, .. }, 5) => Ray {
                 origin: point + rng.vec(-2.0, 2.0).reject_from(normal),
                 dir: rng.unit(),
                 leaving: Some(i),
@@ -415,6 +415,60 @@ fn frames_from_every_kernel_equal_the_scalar_kernels() {
     every_kernel_equals_scalar(&tmp, "glass-alpha", &glass_alpha);
     let out = run_in(&tmp, &["check", "seq.yaml"]);
     assert!(out.status.success(), "{}", stderr(&out));
+}
+
+/// Checker and image maps on planes, spheres and a mesh, seen directly, in a curved mirror and
+/// through glass (cones through reflection and refraction), with motion blur.
+#[test]
+fn textured_frames_from_every_kernel_equal_the_scalar_kernels() {
+    let tmp = scratch("kernels-texture");
+    let textures = common::repo().join("sequences/textures");
+    std::fs::create_dir(tmp.join("textures")).unwrap();
+    for f in ["globe.png", "wood.png"] {
+        std::fs::copy(textures.join(f), tmp.join("textures").join(f)).unwrap();
+    }
+    std::fs::write(
+        tmp.join("tile.obj"),
+        "v -1 0 -1\nv 1 0 -1\nv 1 0.4 1\nv -1 0 1\nvt 0 0\nvt 3 0\nvt 3 3\nvt 0 3\nf 1/1 4/4 3/3 2/2\n",
+    )
+    .unwrap();
+    let seq = "render: { max_depth: 5 }
+materials:
+  tiles: { diffuse: { checker: { size: 0.4, colors: [[0.9, 0.9, 0.9], [0.1, 0.2, 0.1]] } }, ambient: [0.05, 0.05, 0.05], reflection: 0.2 }
+  globe: { diffuse: { image: textures/globe.png }, ambient: { image: textures/globe.png, scale: [1, 1] }, specular: [1, 1, 1], shininess: 80 }
+  wood:  { diffuse: { image: textures/wood.png, scale: [2, 1] }, specular: [0.2, 0.2, 0.2] }
+objects:
+  - plane:  { point: [0, -1, 0], normal: [0, 1, 0], material: tiles }
+  - plane:  { point: [0, 0, -6], normal: [0, 0, 1], u_axis: [1, 1, 0], material: wood }
+  - sphere: { center: [-0.9, 0, -1], radius: 0.8, material: globe }
+  - sphere: { center: [1.1, -0.3, -0.5], radius: 0.6, material: { diffuse: [0.05, 0.05, 0.05], specular: [1, 1, 1], reflection: 0.8 } }
+  - sphere: { center: [0.2, -0.5, 0.8], radius: 0.35, material: { diffuse: [0, 0, 0], transmission: 0.9, ior: 1.5 } }
+  - mesh:   { file: tile.obj, translate: [0.3, -0.9, -2.5], material: wood }
+lights:
+  - point: { position: [4, 5, 6], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }
+timeline:
+  fps: 12
+  keyframes:
+    - { time: 0, position: [0.3, 0.6, 4], look_at: [0, -0.4, -1], fov: 60 }
+    - { time: 1, position: [-0.5, 0.2, 3], look_at: [0, -0.4, -1], fov: 50 }
+";
+    std::fs::write(tmp.join("seq.yaml"), seq).unwrap();
+    every_kernel_equals_scalar(
+        &tmp,
+        "texture",
+        &["--size", "97x55", "--samples", "2", "--frames", "3"],
+    );
+    let blur = [
+        "--size",
+        "81x45",
+        "--samples",
+        "3",
+        "--frames",
+        "5",
+        "--shutter",
+        "180",
+    ];
+    every_kernel_equals_scalar(&tmp, "texture-blur", &blur);
 }
 
 /// Motion blur and depth of field give each lane its own camera, instant and lens point.

@@ -284,9 +284,14 @@ fn transform(seq: &mut Sequence, s: f64, offset: DVec3) {
                 center: map(center),
                 radius: s * radius,
             },
-            Shape::Plane { point, normal } => Shape::Plane {
+            Shape::Plane {
+                point,
+                normal,
+                u_axis,
+            } => Shape::Plane {
                 point: map(point),
                 normal,
+                u_axis,
             },
             Shape::Mesh {
                 mesh,

@@ -3,7 +3,7 @@
 use super::{Error, out, print_warnings, shown};
 use crate::cli::CheckArgs;
 use crate::console::printable;
-use crate::scene::{Light, Scene, Shape};
+use crate::scene::{Image, Light, Scene, Shape, Texture};
 use crate::sequence::{self, Sequence};
 use crate::settings::Settings;
 use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
@@ -81,10 +81,11 @@ fn duration(seconds: f64) -> String {
 pub(crate) fn summary(file: &str, seq: &Sequence) -> String {
     let (scene, s) = (&seq.scene, &seq.settings);
     format!(
-        "{file}: ok\n  objects:    {}\n{}  materials:  {}\n  lights:     {}\n  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}  output:     {}\n",
+        "{file}: ok\n  objects:    {}\n{}  materials:  {}\n{}  lights:     {}\n  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}  output:     {}\n",
         objects(scene),
         super::meshes::summary(scene),
         scene.materials.len(),
+        textures(scene),
         lights(scene),
         s.width,
         s.height,
@@ -121,6 +122,51 @@ fn objects(scene: &Scene) -> String {
             n => format!(", {n} meshes"),
         }
     )
+}
+
+/// The `textures:` lines, nothing without textures: each image once (its size, levels,
+/// memory and load time), and the number of checker maps.
+fn textures(scene: &Scene) -> String {
+    let maps = scene
+        .materials
+        .iter()
+        .flat_map(|m| [&m.diffuse_map, &m.ambient_map])
+        .flatten();
+    let (mut images, mut checkers) = (Vec::new(), 0);
+    for t in maps {
+        match t {
+            Texture::Checker { .. } => checkers += 1,
+            Texture::Image { image, .. } => {
+                if !images
+                    .iter()
+                    .any(|i: &&std::sync::Arc<Image>| std::sync::Arc::ptr_eq(i, image))
+                {
+                    images.push(image);
+                }
+            }
+        }
+    }
+    let mut out = String::new();
+    for i in images {
+        let l0 = &i.levels[0];
+        let texels: usize = i.levels.iter().map(|l| l.texels.len()).sum();
+        out += &format!(
+            "  texture:    {} {}x{}, {} mip levels, {:.1} MiB, read in {:.3} s\n",
+            printable(&i.file.to_string_lossy()),
+            l0.width,
+            l0.height,
+            i.levels.len(),
+            (texels * 12) as f64 / (1u64 << 20) as f64,
+            i.load_seconds
+        );
+    }
+    if checkers > 0 {
+        out += &format!(
+            "  texture:    {} (box-filtered over each ray's footprint)\n",
+            noun(checkers as f64, "checker map")
+        );
+    }
+    out
 }
 
 /// The `lights:` line: `2 (1 point, 1 ambient)`, or `0 (none)`.

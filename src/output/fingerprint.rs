@@ -6,7 +6,7 @@
 
 use super::format::{ExrPrecision, FileFormat};
 use crate::camera::{Camera, Pose};
-use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
+use crate::scene::{Intensity, Light, Material, Object, Scene, Shape, Texture};
 use crate::settings::{Adaptive, Precision, Sampler, Settings};
 use crate::shutter::FrameView;
 use crate::transfer::Encoding;
@@ -220,7 +220,17 @@ impl Canon for Object {
         let Object { shape, material } = self;
         match shape {
             Shape::Sphere { center, radius } => tagged(h, 0, &[center, radius]),
-            Shape::Plane { point, normal } => tagged(h, 1, &[point, normal]),
+            // A plane without `u_axis` encodes as before textures existed.
+            Shape::Plane {
+                point,
+                normal,
+                u_axis: None,
+            } => tagged(h, 1, &[point, normal]),
+            Shape::Plane {
+                point,
+                normal,
+                u_axis: Some(u),
+            } => tagged(h, 3, &[point, normal, u]),
             Shape::Mesh {
                 mesh,
                 place,
@@ -240,17 +250,54 @@ impl Canon for Object {
     }
 }
 
-canon_struct!(Material {
-    ambient,
-    diffuse,
-    specular,
-    exponent,
-    specular_floor,
-    reflection,
-    transmission,
-    ior,
-    fresnel,
-});
+/// A material without textures encodes as before textures existed; a texture follows its
+/// tag (`maps`), an image by its content (the digest of its file and decoding) and scale.
+impl Canon for Material {
+    fn canon(&self, h: &mut Hasher) {
+        let Material {
+            ambient,
+            diffuse,
+            specular,
+            exponent,
+            specular_floor,
+            reflection,
+            transmission,
+            ior,
+            fresnel,
+            diffuse_map,
+            ambient_map,
+        } = self;
+        let plain: [&dyn Canon; 9] = [
+            ambient,
+            diffuse,
+            specular,
+            exponent,
+            specular_floor,
+            reflection,
+            transmission,
+            ior,
+            fresnel,
+        ];
+        plain.iter().for_each(|f| f.canon(h));
+        if diffuse_map.is_some() || ambient_map.is_some() {
+            h.write(b"maps");
+            diffuse_map.canon(h);
+            ambient_map.canon(h);
+        }
+    }
+}
+
+impl Canon for Texture {
+    fn canon(&self, h: &mut Hasher) {
+        match self {
+            Texture::Checker { size, colors } => tagged(h, 0, &[size, colors]),
+            Texture::Image { image, scale } => {
+                let scale = [scale.x, scale.y];
+                tagged(h, 1, &[&image.digest, &scale])
+            }
+        }
+    }
+}
 
 canon_struct!(Intensity {
     ambient,

@@ -33,10 +33,15 @@ impl Meshes {
         (self.loaded, self.warnings)
     }
 
+    /// Whether the mesh `shape` places has texture coordinates.
+    pub(super) fn has_uvs(&self, shape: &Shape) -> bool {
+        matches!(shape, Shape::Mesh { mesh, .. } if self.loaded[*mesh].uvs.is_some())
+    }
+
     /// Reads (or reuses) the file of `m` and checks its placement.
     pub(super) fn place(&mut self, path: &str, m: &raw::Mesh) -> Check<Shape> {
         let field = format!("{path}.file");
-        let file = self.resolve(&field, &m.file)?;
+        let file = resolve(&self.base, &field, &m.file, "a mesh")?;
         let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
         let index = match self.by_path.get(&key) {
             Some(&i) => i,
@@ -63,41 +68,42 @@ impl Meshes {
             shading: m.shading.unwrap_or_default(),
         })
     }
+}
 
-    /// `file` against the sequence file's folder; like `output`, a sequence file may only
-    /// reach below its own folder (no absolute path, no `..`, no link leading out).
-    fn resolve(&self, field: &str, file: &str) -> Check<PathBuf> {
-        let p = Path::new(file);
-        let climbs = p
-            .components()
-            .any(|c| matches!(c, std::path::Component::ParentDir));
-        if file.is_empty() || p.is_absolute() || climbs || file.starts_with('~') {
-            return invalid(
-                field,
-                format!(
-                    "a mesh file must be a relative path below the sequence file's folder, without `..` (got `{file}`); copy or link the model there"
-                ),
-            );
-        }
-        let full = self.base.join(p);
-        let base = std::fs::canonicalize(if self.base.as_os_str().is_empty() {
-            Path::new(".")
-        } else {
-            &self.base
-        });
-        if let (Ok(base), Ok(real)) = (base, std::fs::canonicalize(&full))
-            && !real.starts_with(&base)
-        {
-            return invalid(
-                field,
-                format!(
-                    "`{file}` leads outside the sequence file's folder once symbolic links are followed (to {}); copy the model there",
-                    real.display()
-                ),
-            );
-        }
-        Ok(full)
+/// `file` against the sequence file's folder `base`; like `output`, a sequence file may only
+/// reach below its own folder (no absolute path, no `..`, no link leading out). `what` names
+/// the kind of file in messages ("a mesh", "a texture").
+pub(super) fn resolve(base: &Path, field: &str, file: &str, what: &str) -> Check<PathBuf> {
+    let p = Path::new(file);
+    let climbs = p
+        .components()
+        .any(|c| matches!(c, std::path::Component::ParentDir));
+    if file.is_empty() || p.is_absolute() || climbs || file.starts_with('~') {
+        return invalid(
+            field,
+            format!(
+                "{what} file must be a relative path below the sequence file's folder, without `..` (got `{file}`); copy or link it there"
+            ),
+        );
     }
+    let full = base.join(p);
+    let canonical_base = std::fs::canonicalize(if base.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        base
+    });
+    if let (Ok(b), Ok(real)) = (canonical_base, std::fs::canonicalize(&full))
+        && !real.starts_with(&b)
+    {
+        return invalid(
+            field,
+            format!(
+                "`{file}` leads outside the sequence file's folder once symbolic links are followed (to {}); copy the file there",
+                real.display()
+            ),
+        );
+    }
+    Ok(full)
 }
 
 fn placement(path: &str, m: &raw::Mesh) -> Check<Placement> {

@@ -14,6 +14,7 @@ mod messages;
 pub(crate) mod raw;
 mod scene;
 mod settings;
+mod textures;
 mod timeline;
 
 use fields::*;
@@ -278,9 +279,10 @@ fn scene_of(raw: &raw::Sequence, base: &Path) -> Check<(Scene, Vec<String>)> {
         "render.background",
         raw.render.background.unwrap_or_default(),
     )?;
+    let mut textures = textures::Textures::new(base);
     let mut materials = Vec::new();
     for (name, m) in &raw.materials.0 {
-        materials.push(material(&format!("materials.{name}"), m)?);
+        materials.push(material(&format!("materials.{name}"), m, &mut textures)?);
     }
     let names: Vec<&str> = raw.materials.0.iter().map(|(n, _)| n.as_str()).collect();
     let mut objects = Vec::new();
@@ -296,7 +298,8 @@ fn scene_of(raw: &raw::Sequence, base: &Path) -> Check<(Scene, Vec<String>)> {
     let mut meshes = meshes::Meshes::new(base);
     for (i, o) in raw.objects.iter().enumerate() {
         let path = format!("objects[{i}]");
-        objects.push(object(&path, o, &names, &mut materials, &mut meshes)?);
+        let files = (&mut meshes, &mut textures);
+        objects.push(object(&path, o, &names, &mut materials, files)?);
     }
     let (meshes, warnings) = meshes.finish();
     let mut lights = Vec::new();

@@ -83,8 +83,8 @@ pub struct Camera {
 #[serde(deny_unknown_fields)]
 pub struct Material {
     #[serde(default)]
-    pub ambient: V3,
-    pub diffuse: V3,
+    pub ambient: Paint,
+    pub diffuse: Paint,
     #[serde(default)]
     pub specular: V3,
     pub shininess: Option<f64>,
@@ -93,6 +93,65 @@ pub struct Material {
     pub ior: Option<f64>,
     #[serde(default)]
     pub fresnel: bool,
+}
+
+/// `diffuse` or `ambient`: a colour triple, or a texture map (`{ checker: … }`, `{ image: … }`).
+#[derive(Debug, Clone)]
+pub enum Paint {
+    Color(V3),
+    Map(Box<TextureMap>),
+}
+
+impl Default for Paint {
+    fn default() -> Paint {
+        Paint::Color([0.0; 3])
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TextureMap {
+    pub checker: Option<Checker>,
+    pub image: Option<String>,
+    pub scale: Option<[f64; 2]>,
+    pub encoding: Option<ImageEncoding>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Checker {
+    pub size: Option<f64>,
+    pub colors: [V3; 2],
+}
+
+/// How an image's 8- or 16-bit values map to linear light.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ImageEncoding {
+    Srgb,
+    Linear,
+}
+
+impl<'de> Deserialize<'de> for Paint {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct P;
+        impl<'de> Visitor<'de> for P {
+            type Value = Paint;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str(
+                    "a colour triple [r, g, b] or a texture map ({ checker: … } or { image: … })",
+                )
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<Paint, A::Error> {
+                V3::deserialize(serde::de::value::SeqAccessDeserializer::new(seq)).map(Paint::Color)
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Paint, A::Error> {
+                TextureMap::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(|m| Paint::Map(Box::new(m)))
+            }
+        }
+        d.deserialize_any(P)
+    }
 }
 
 /// A colour filter given as one number for every channel (`0.9`) or as a triple.
@@ -232,6 +291,7 @@ pub struct Sphere {
 pub struct Plane {
     pub point: V3,
     pub normal: V3,
+    pub u_axis: Option<V3>,
     pub material: MaterialRef,
 }
 

@@ -1,10 +1,17 @@
 //! `materials:`, `objects:` and `lights:` → the validated `Scene`'s parts.
 
 use super::*;
+use crate::scene::Texture;
 
-pub(super) fn material(path: &str, m: &raw::Material) -> Check<Material> {
+pub(super) fn material(
+    path: &str,
+    m: &raw::Material,
+    textures: &mut super::textures::Textures,
+) -> Check<Material> {
     let shininess = m.shininess.unwrap_or(100.0);
     let exponent = shininess / 4.0;
+    let (ambient, ambient_map) = textures.paint(&format!("{path}.ambient"), &m.ambient)?;
+    let (diffuse, diffuse_map) = textures.paint(&format!("{path}.diffuse"), &m.diffuse)?;
     Ok(Material {
         // x^e < 1e-30 ⇔ x < exp(−69.08 / e).
         specular_floor: if exponent > 0.0 {
@@ -12,8 +19,10 @@ pub(super) fn material(path: &str, m: &raw::Material) -> Check<Material> {
         } else {
             0.0
         },
-        ambient: color(&format!("{path}.ambient"), m.ambient)?,
-        diffuse: color(&format!("{path}.diffuse"), m.diffuse)?,
+        ambient,
+        diffuse,
+        ambient_map,
+        diffuse_map,
         specular: color(&format!("{path}.specular"), m.specular)?,
         exponent: in_range(
             &format!("{path}.shininess"),
@@ -80,6 +89,7 @@ pub(super) fn material_ref(
     r: &raw::MaterialRef,
     names: &[&str],
     materials: &mut Vec<Material>,
+    textures: &mut super::textures::Textures,
 ) -> Check<usize> {
     match r {
         raw::MaterialRef::Named(n) => names.iter().position(|m| m == n).map_or_else(
@@ -94,7 +104,7 @@ pub(super) fn material_ref(
             Ok,
         ),
         raw::MaterialRef::Inline(m) => {
-            materials.push(material(path, m)?);
+            materials.push(material(path, m, textures)?);
             Ok(materials.len() - 1)
         }
     }
@@ -128,8 +138,11 @@ pub(super) fn object(
     o: &raw::Object,
     names: &[&str],
     materials: &mut Vec<Material>,
-    meshes: &mut super::meshes::Meshes,
+    (meshes, textures): (&mut super::meshes::Meshes, &mut super::textures::Textures),
 ) -> Check<Object> {
+    let mut material = |p: &str, r: &raw::MaterialRef| {
+        material_ref(&format!("{p}.material"), r, names, materials, textures)
+    };
     let which = exactly_one(
         path,
         &[
@@ -141,9 +154,22 @@ pub(super) fn object(
     if which == 2 {
         let m = o.mesh.as_ref().expect("checked");
         let p = format!("{path}.mesh");
+        let shape = meshes.place(&p, m)?;
+        let index = material(&p, &m.material)?;
+        let image = |t: &Option<Texture>| matches!(t, Some(Texture::Image { .. }));
+        let mat = &materials[index];
+        if (image(&mat.diffuse_map) || image(&mat.ambient_map)) && !meshes.has_uvs(&shape) {
+            return invalid(
+                format!("{p}.material"),
+                format!(
+                    "an image texture needs texture coordinates, and {} has none (OBJ `vt`, PLY `u`/`v` or `s`/`t`); use a checker or add UVs",
+                    m.file
+                ),
+            );
+        }
         return Ok(Object {
-            shape: meshes.place(&p, m)?,
-            material: material_ref(&format!("{p}.material"), &m.material, names, materials)?,
+            shape,
+            material: index,
         });
     }
     if which == 0 {
@@ -160,19 +186,44 @@ pub(super) fn object(
                     "a positive length in [1e-100, 1e100]",
                 )?,
             },
-            material: material_ref(&format!("{p}.material"), &s.material, names, materials)?,
+            material: material(&p, &s.material)?,
         })
     } else {
         let s = o.plane.as_ref().expect("checked");
         let p = format!("{path}.plane");
         Ok(Object {
-            shape: Shape::Plane {
-                point: vector(&format!("{p}.point"), s.point)?,
-                normal: unit(&format!("{p}.normal"), s.normal)?,
-            },
-            material: material_ref(&format!("{p}.material"), &s.material, names, materials)?,
+            shape: plane(&p, s)?,
+            material: material(&p, &s.material)?,
         })
     }
+}
+
+/// A plane; its `u_axis`, when given, projected into the plane and made unit length.
+fn plane(path: &str, s: &raw::Plane) -> Check<Shape> {
+    let normal = unit(&format!("{path}.normal"), s.normal)?;
+    let u_axis = match s.u_axis {
+        None => None,
+        Some(a) => {
+            let field = format!("{path}.u_axis");
+            let a = unit(&field, a)?;
+            let along = a - normal * a.dot(normal);
+            if along.length() < 1e-6 {
+                return invalid(
+                    &field,
+                    format!(
+                        "must not be parallel to the plane's normal {}",
+                        got(num3(a))
+                    ),
+                );
+            }
+            Some(along.normalize())
+        }
+    };
+    Ok(Shape::Plane {
+        point: vector(&format!("{path}.point"), s.point)?,
+        normal,
+        u_axis,
+    })
 }
 
 pub(super) fn intensity(

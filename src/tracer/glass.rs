@@ -13,6 +13,7 @@ use super::bvh::Bvh;
 use super::intersect::{plane_hit, sphere_hit};
 use super::mesh::Instance;
 use super::shade::{Eye, NEGLIGIBLE_WEIGHT, Shaded, powi, shade_hit};
+use super::texture::{self, Cone};
 use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{Material, Object, Shape};
 use glam::DVec3;
@@ -67,7 +68,7 @@ pub(super) fn transmittance<V: Lanes>(
                 let f = shadow.origin - V3::splat(center);
                 sphere_hit(f, None, V::splat(c.r2), shadow.dir, own, open)
             }
-            (Shape::Plane { point, normal }, _) => plane_hit(
+            (Shape::Plane { point, normal, .. }, _) => plane_hit(
                 V3::splat(point),
                 V3::splat(normal),
                 shadow.origin,
@@ -193,6 +194,8 @@ struct Branch<V: Lanes> {
     rays: Rays<V>,
     active: V::M,
     weight: V3<V>,
+    /// The rays' footprint cones (used when the eye's `footprint` is set).
+    cone: Cone<V>,
 }
 
 /// Rays one eye sample's tree may trace (eye, reflection and transmission rays, not shadow
@@ -223,7 +226,9 @@ pub(super) fn trace_tree<V: Lanes>(
         rays: eye.rays,
         active: eye.active,
         weight: V3::splat(DVec3::ONE),
+        cone: Cone::eye(eye.footprint.unwrap_or(0.0)),
     }];
+    let textured = eye.footprint.is_some();
     let mut next = Vec::new();
     for depth in 0..max_depth {
         for b in &level {
@@ -244,24 +249,46 @@ pub(super) fn trace_tree<V: Lanes>(
             if !hit.hit.any() {
                 continue;
             }
-            let at = shade_hit(world, &b.rays, &hit, rays);
+            let width = if textured {
+                Some(b.cone.at(hit.t))
+            } else {
+                None
+            };
+            let at = shade_hit(world, &b.rays, &hit, rays, width);
             color = V3::select(hit.hit, color + at.local * b.weight, color);
             if depth + 1 == max_depth {
                 continue;
             }
+            let (mirror, through) = match textured {
+                true => {
+                    let bend = texture::curvature(world, hit.object);
+                    let flat = V::splat(0.0);
+                    (
+                        b.cone.leaving(hit.t, bend, at.entering),
+                        b.cone.leaving(hit.t, flat, at.entering),
+                    )
+                }
+                false => (b.cone, b.cone),
+            };
             let split = scatter(&Optics::of(&at), b.rays.dir, at.normal, at.entering);
             let transmitted = Rays {
                 origin: at.leave(split.refracted),
                 dir: split.refracted,
                 leaving: hit.object,
             };
+            let reflected = at.reflected(&b.rays, &hit);
             grow(
                 &mut next,
-                at.reflected(&b.rays, &hit),
+                (reflected, mirror),
                 b.weight * split.reflect,
                 hit.hit,
             );
-            grow(&mut next, transmitted, b.weight * split.transmit, hit.hit);
+            grow(
+                &mut next,
+                (transmitted, through),
+                b.weight * split.transmit,
+                hit.hit,
+            );
         }
         if next.is_empty() {
             break;
@@ -278,7 +305,12 @@ pub(super) fn trace_tree<V: Lanes>(
 /// a packet of its own. Each lane still meets its own branches in the same order, so no
 /// pixel changes; only fewer, fuller packets are traced.
 #[inline(always)]
-fn grow<V: Lanes>(next: &mut Vec<Branch<V>>, rays: Rays<V>, weight: V3<V>, active: V::M) {
+fn grow<V: Lanes>(
+    next: &mut Vec<Branch<V>>,
+    (rays, cone): (Rays<V>, Cone<V>),
+    weight: V3<V>,
+    active: V::M,
+) {
     let largest = weight.x.max(weight.y).max(weight.z);
     let active = active.andnot(largest.lt(V::splat(NEGLIGIBLE_WEIGHT)));
     if !active.any() {
@@ -293,6 +325,7 @@ fn grow<V: Lanes>(next: &mut Vec<Branch<V>>, rays: Rays<V>, weight: V3<V>, activ
             leaving: V::select(active, rays.leaving, last.rays.leaving),
         };
         last.weight = V3::select(active, weight, last.weight);
+        last.cone = Cone::select(active, cone, last.cone);
         last.active = last.active.or(active);
         return;
     }
@@ -300,6 +333,7 @@ fn grow<V: Lanes>(next: &mut Vec<Branch<V>>, rays: Rays<V>, weight: V3<V>, activ
         rays,
         active,
         weight,
+        cone,
     });
 }
 

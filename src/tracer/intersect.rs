@@ -103,7 +103,7 @@ pub fn intersect(shape: &Shape, ray: &Ray, own: bool) -> Option<f64> {
             let f = o - V3::splat(center);
             sphere_hit(f, None, F64x1(radius * radius), d, own, true)
         }
-        Shape::Plane { point, normal } => {
+        Shape::Plane { point, normal, .. } => {
             plane_hit(V3::splat(point), V3::splat(normal), o, d, own, true)
         }
         // Meshes need their file's triangles: `accel::Geometry` tests them.
@@ -198,6 +198,7 @@ mod tests {
         let p = Shape::Plane {
             point: DVec3::new(0.0, -0.7, 0.0),
             normal: DVec3::Y,
+            u_axis: None,
         };
         let t = intersect(&p, &ray([0., 0., 0.], [0., -1., 0.]), false).unwrap();
         assert!((t - 0.7).abs() < 1e-15);

@@ -16,6 +16,7 @@ pub mod precision;
 mod rows;
 pub mod sample;
 pub mod shade;
+pub mod texture;
 mod triangle;
 
 use crate::frame::Frame;
@@ -43,6 +44,17 @@ pub struct World {
     branches: bool,
     /// The hierarchy of each of `scene.meshes`, built once and shared by every placement.
     bvhs: Vec<Arc<bvh::Bvh>>,
+    /// Some material has a texture: eye rays carry footprint cones (`texture`).
+    textured: bool,
+    /// Eye cones have spread 0 (point-sampled textures), to measure what filtering buys.
+    point_sampled: bool,
+    /// Where the scene's origin lies in the world: zero, or the camera's position in an f32
+    /// frame's shifted world (textures are looked up in world coordinates).
+    origin: DVec3,
+    /// The scene in world coordinates when `scene` is shifted and textured.
+    unshifted: Option<Arc<Scene>>,
+    /// Each object's curvature for the cones (empty without textures).
+    curvature: Vec<f64>,
 }
 
 impl World {
@@ -58,14 +70,24 @@ impl World {
         let opaque = (!clear.is_empty()).then(|| {
             accel::Geometry::subset(&scene.objects, &bvhs, |i| !material(i).transparent())
         });
-        World {
+        let textured = scene.materials.iter().any(|m| m.textured());
+        let mut world = World {
             branches: scene.materials.iter().any(|m| m.branches()),
             scene,
             geometry,
             opaque,
             clear,
             bvhs,
+            textured,
+            point_sampled: false,
+            origin: DVec3::ZERO,
+            unshifted: None,
+            curvature: Vec::new(),
+        };
+        if textured {
+            world.curvature = texture::curvatures(&world);
         }
+        world
     }
 
     /// Whether some object is a mesh (shading then lifts secondary rays off triangles).
@@ -85,6 +107,24 @@ impl World {
             opaque: self.opaque.as_ref().map(|g| g.shifted(by, PAD)),
             branches: self.branches,
             bvhs: self.bvhs.clone(),
+            textured: self.textured,
+            point_sampled: self.point_sampled,
+            origin: self.origin + by,
+            unshifted: match (&self.unshifted, self.textured) {
+                (Some(s), _) => Some(s.clone()),
+                (None, true) => Some(Arc::new(self.scene.clone())),
+                (None, false) => None,
+            },
+            curvature: self.curvature.clone(),
+        }
+    }
+
+    /// This world with textures looked up at points, unfiltered: what `bench` and the tests
+    /// compare filtering against.
+    pub fn point_sampled(self) -> World {
+        World {
+            point_sampled: true,
+            ..self
         }
     }
 

@@ -65,7 +65,7 @@ pub fn f32_limit(scene: &Scene, camera: &Camera, settings: &Settings) -> Option<
             Shape::Sphere { center, radius } => {
                 ((center - camera.origin).length() + radius, "sphere", radius)
             }
-            Shape::Plane { point, normal } => {
+            Shape::Plane { point, normal, .. } => {
                 ((point - camera.origin).dot(normal).abs(), "plane", 1.0)
             }
             // A mesh: its farthest box corner; its smallest scale factor must square in f32.

@@ -233,6 +233,11 @@ fn packet<V: Lanes>(
         V3::<V>::splat(DVec3::INFINITY),
         V3::<V>::splat(DVec3::NEG_INFINITY),
     );
+    // Each sample's cone spans the pixel's width divided by √samples (docs/spec/texture.md).
+    let footprint = pass.world.textured.then(|| match pass.world.point_sampled {
+        true => 0.0,
+        false => 2.0 * pass.camera.tan_half_fov / f64::from(s.width) / f64::from(s.samples).sqrt(),
+    });
     let dims = pass.exposure.map(|_| {
         per_lane(V::N, Dims::new(pattern, 0, 0), |k| {
             Dims::new(pattern, pass.frame, pixel(k))
@@ -246,6 +251,7 @@ fn packet<V: Lanes>(
                 active: V::M::from_bits(px.valid),
                 from_origin: None,
                 transparent: s.alpha,
+                footprint,
             },
             _ => Eye {
                 rays: Rays {
@@ -256,6 +262,7 @@ fn packet<V: Lanes>(
                 active: V::M::from_bits(px.valid),
                 from_origin: Some(pass.from_origin),
                 transparent: s.alpha,
+                footprint,
             },
         };
         let (c, covered) = shade::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays);
@@ -527,6 +534,7 @@ pub(super) fn rays<V: Lanes>(
             active: V::M::first(chunk.len()),
             from_origin: None,
             transparent: false,
+            footprint: world.textured.then_some(0.0),
         };
         let (c, _) = shade::trace_packet(world, &eye, max_depth, &mut cast);
         for (k, o) in out.iter_mut().enumerate() {

@@ -10,6 +10,7 @@ use super::World;
 use super::accel::{FromOrigin, Nearest, Rays};
 use super::intersect::Ray;
 use super::polygon::MeshLanes;
+use super::texture::{self, At, Cone};
 use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{Light, Material, Shape};
 use glam::DVec3;
@@ -31,6 +32,8 @@ pub struct Eye<'a, V: Lanes> {
     /// Eye rays that miss add nothing (a transparent background, for alpha); reflection rays
     /// that miss still see the background.
     pub transparent: bool,
+    /// The eye rays' footprint spread (radians) when the scene has textures (`texture::Cone`).
+    pub footprint: Option<f64>,
 }
 
 /// Follows one eye ray through at most `max_depth` surfaces; returns its colour (the one-lane
@@ -45,6 +48,7 @@ pub fn trace(world: &World, eye: Ray, max_depth: u32) -> DVec3 {
         active: true,
         from_origin: None,
         transparent: false,
+        footprint: world.textured.then_some(0.0),
     };
     trace_packet(world, &eye, max_depth, &mut 0).0.lane(0)
 }
@@ -68,6 +72,13 @@ pub fn trace_packet<V: Lanes>(
     let mut color = V3::zero();
     let mut weight = V::splat(1.0);
     let mut covered = V::M::none_set();
+    // `match`, not `Option::map`: a closure is compiled outside the kernel's
+    // `#[target_feature]` function, and lane operations must stay in it.
+    #[allow(clippy::manual_map)]
+    let mut cone = match eye.footprint {
+        Some(spread) => Some(Cone::<V>::eye(spread)),
+        None => None,
+    };
     for depth in 0..max_depth {
         *rays += active.count();
         let from_origin = if depth == 0 { eye.from_origin } else { None };
@@ -83,7 +94,12 @@ pub fn trace_packet<V: Lanes>(
         if !active.any() {
             break;
         }
-        let at = shade_hit(world, &ray, &hit, rays);
+        #[allow(clippy::manual_map)]
+        let width = match &cone {
+            Some(c) => Some(c.at(hit.t)),
+            None => None,
+        };
+        let at = shade_hit(world, &ray, &hit, rays, width);
         color = V3::select(active, color + at.local * weight, color);
         weight = weight * at.surface.reflection;
         active = active.andnot(weight.lt(V::splat(NEGLIGIBLE_WEIGHT)));
@@ -91,6 +107,10 @@ pub fn trace_packet<V: Lanes>(
             break;
         }
         ray = at.reflected(&ray, &hit);
+        if let Some(c) = &cone {
+            let bend = texture::curvature(world, hit.object);
+            cone = Some(c.leaving(hit.t, bend, at.entering));
+        }
     }
     (color, covered)
 }
@@ -124,15 +144,17 @@ pub(super) struct Shaded<'a, V: Lanes> {
     pub local: V3<V>,
 }
 
-/// Shades the lanes `hit.hit` (at least one) of a packet.
+/// Shades the lanes `hit.hit` (at least one) of a packet; `footprint` is the rays' cone
+/// width at the hits when the scene has textures.
 #[inline(always)]
 pub(super) fn shade_hit<'a, V: Lanes>(
     world: &'a World,
     ray: &Rays<V>,
     hit: &Nearest<V>,
     rays: &mut u64,
+    footprint: Option<V>,
 ) -> Shaded<'a, V> {
-    let surface = Surface::gather(world, hit);
+    let mut surface = Surface::gather(world, hit);
     let point = ray.origin + ray.dir * hit.t;
     let (mut normal, mut entering) = surface.normal(point, ray.dir);
     let mesh = match world.has_meshes() {
@@ -144,6 +166,9 @@ pub(super) fn shade_hit<'a, V: Lanes>(
     if let Some(m) = &mesh {
         let at = m.facing(ray.dir, normal, entering);
         (normal, entering, lift, here) = (at.0, at.1, Some(at.2), here.andnot(m.elsewhere()));
+    }
+    if let Some(width) = footprint {
+        surface.paint(world, hit, (point, normal, ray.dir), width);
     }
     // Station 0 lights the hit; on `gouraud` and `constant` lanes stations 1–3 light the
     // vertices and 4 the centroid (`polygon`). One call of `local` keeps the kernels small.
@@ -287,6 +312,49 @@ impl<'a, V: Lanes> Surface<'a, V> {
         let n = V3::select(self.is_plane, self.plane_normal, sphere);
         let inside = n.dot(dir).gt(V::splat(0.0));
         (V3::select(inside, -n, n), V::M::first(V::N).andnot(inside))
+    }
+
+    /// Replaces the diffuse and ambient colours of the lanes whose material has a texture by
+    /// the texture's, filtered over the footprint of cone width `width`.
+    #[inline(always)]
+    fn paint(
+        &mut self,
+        world: &World,
+        hit: &Nearest<V>,
+        (p, n, d): (V3<V>, V3<V>, V3<V>),
+        width: V,
+    ) {
+        let hits = hit.hit.bits();
+        if !(0..V::N).any(|k| hits >> k & 1 == 1 && self.materials[k].textured()) {
+            return;
+        }
+        let (p, n, d) = (
+            [p.x.array(), p.y.array(), p.z.array()],
+            [n.x.array(), n.y.array(), n.z.array()],
+            [d.x.array(), d.y.array(), d.z.array()],
+        );
+        let (width, object, u, v) = (
+            width.array(),
+            hit.object.array(),
+            hit.u.array(),
+            hit.v.array(),
+        );
+        let vec = |a: &[[f64; MAX_LANES]; 3], k: usize| DVec3::new(a[0][k], a[1][k], a[2][k]);
+        let at: [Option<At>; MAX_LANES] = std::array::from_fn(|k| {
+            (k < V::N && hits >> k & 1 == 1 && self.materials[k].textured()).then(|| At {
+                p: vec(&p, k) + world.origin,
+                n: vec(&n, k),
+                d: vec(&d, k),
+                r: 0.5 * width[k],
+                object: object[k] as usize,
+                prim: hit.prim[k],
+                bary: (u[k], v[k]),
+            })
+        });
+        let diffuse = std::array::from_fn(|k| self.materials[k].diffuse_map.as_ref());
+        let ambient = std::array::from_fn(|k| self.materials[k].ambient_map.as_ref());
+        self.diffuse = texture::lanes(world, &diffuse, &at, self.diffuse);
+        self.ambient = texture::lanes(world, &ambient, &at, self.ambient);
     }
 
     /// max(0, N·H)^exponent per lane (see `specular_power`).

@@ -19,6 +19,7 @@ use std::time::Instant;
 
 mod kernels;
 mod mesh;
+mod texture;
 
 const TALK: &str = include_str!("../../../sequences/talk.yaml");
 const TALK_ORBIT: &str = include_str!("../../../sequences/bench/talk_orbit.yaml");
@@ -229,6 +230,9 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), BenchError> {
     }
     if want("mesh") {
         mesh::meshes(o, out, &cmd("mesh"))?;
+    }
+    if want("texture") {
+        texture::textures(o, out, &cmd("texture"))?;
     }
     if want("render") || want("threads") {
         let threads = want("threads").then(|| cmd("threads"));

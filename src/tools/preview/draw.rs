@@ -27,7 +27,7 @@ pub(super) fn draw_solids(c: &mut Canvas, p: &Panel, seq: &Sequence, plot: &Plot
         let material = &seq.scene.materials[o.material];
         let (fill, edge) = (tint(material, 0.22), shade(material));
         match o.shape {
-            Shape::Plane { point, normal } => c.mask(
+            Shape::Plane { point, normal, .. } => c.mask(
                 p.rect(),
                 |x, y| (p.world_at(x, y) - point).dot(normal) < 0.0,
                 fill,

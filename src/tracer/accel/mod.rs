@@ -117,7 +117,7 @@ impl Geometry {
                     r2: radius * radius,
                     object,
                 }),
-                Shape::Plane { point, normal } => planes.push(Flat {
+                Shape::Plane { point, normal, .. } => planes.push(Flat {
                     point,
                     normal,
                     object,

@@ -30,6 +30,7 @@ fn hierarchy_finds_exactly_what_the_plain_loop_finds() {
         shape: Shape::Plane {
             point: DVec3::new(0.0, -11.0, 0.0),
             normal: DVec3::Y,
+            u_axis: None,
         },
         material: 0,
     });

@@ -1,0 +1,308 @@
+//! Texture maps of `diffuse` and `ambient`: a checker, or an image file resolved against the
+//! sequence file's folder (kept inside it, like meshes), read once however many materials use
+//! it, decoded to linear RGB and reduced to its mip pyramid (docs/spec/texture.md).
+//!
+//! ```yaml
+//! diffuse: { checker: { size: 1, colors: [[0.9, 0.9, 0.9], [0.1, 0.1, 0.1]] } }
+//! diffuse: { image: textures/wood.png, scale: [2, 2] }
+//! ```
+
+use super::*;
+use crate::scene::{Image, Level, Texture};
+use glam::DVec2;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// Files above this many bytes are refused unread.
+pub const MAX_TEXTURE_BYTES: u64 = 1 << 30;
+/// At most this many pixels a side, and `MAX_TEXELS` in all (768 MiB of f32 RGB, a third
+/// more with its pyramid).
+pub const MAX_SIDE: u32 = 16384;
+pub const MAX_TEXELS: u64 = 1 << 26;
+/// A checker cell at least this large, at most `MAX_MAGNITUDE`.
+const MIN_CELL: f64 = 1e-100;
+
+/// The images the materials use, in order of first use, each read once.
+pub(super) struct Textures {
+    base: PathBuf,
+    by_path: HashMap<(PathBuf, bool), Arc<Image>>,
+}
+
+impl Textures {
+    pub(super) fn new(base: &Path) -> Textures {
+        Textures {
+            base: base.to_owned(),
+            by_path: HashMap::new(),
+        }
+    }
+
+    /// A colour, or the texture and the colour that stands for it where one colour must do
+    /// (its mean: the checker's two colours halved, the image's last mip level).
+    pub(super) fn paint(&mut self, field: &str, p: &raw::Paint) -> Check<(DVec3, Option<Texture>)> {
+        let map = match p {
+            raw::Paint::Color(c) => return Ok((color(field, *c)?, None)),
+            raw::Paint::Map(m) => m,
+        };
+        let texture = match (&map.checker, &map.image) {
+            (Some(c), None) => checker(field, c, map)?,
+            (None, Some(file)) => self.image(field, file, map)?,
+            (None, None) => {
+                return invalid(field, "a texture map needs `checker:` or `image:`");
+            }
+            (Some(_), Some(_)) => {
+                return invalid(field, "give `checker:` or `image:`, not both");
+            }
+        };
+        Ok((mean(&texture), Some(texture)))
+    }
+
+    fn image(&mut self, field: &str, file: &str, map: &raw::TextureMap) -> Check<Texture> {
+        let scale = match map.scale {
+            None => DVec2::ONE,
+            Some(s) => {
+                let f = format!("{field}.scale");
+                let v = vector(&f, [s[0], s[1], 1.0])?;
+                if v.x.abs().min(v.y.abs()) < MIN_CELL || v.x.abs().max(v.y.abs()) > MAX_MAGNITUDE {
+                    return invalid(
+                        &f,
+                        format!(
+                            "each factor must be non-zero and at most 1e100 in size {}",
+                            got(format!("[{}, {}]", num(s[0]), num(s[1])))
+                        ),
+                    );
+                }
+                DVec2::new(v.x, v.y)
+            }
+        };
+        let f = format!("{field}.image");
+        let path = super::meshes::resolve(&self.base, &f, file, "a texture")?;
+        let linear = map.encoding == Some(raw::ImageEncoding::Linear);
+        let key = (
+            std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone()),
+            linear,
+        );
+        let image = match self.by_path.get(&key) {
+            Some(i) => i.clone(),
+            None => {
+                let image = load(&path, linear).or_else(|m| invalid(&f, m))?;
+                let image = Arc::new(image);
+                self.by_path.insert(key, image.clone());
+                image
+            }
+        };
+        Ok(Texture::Image { image, scale })
+    }
+}
+
+fn checker(field: &str, c: &raw::Checker, map: &raw::TextureMap) -> Check<Texture> {
+    if map.scale.is_some() || map.encoding.is_some() {
+        return invalid(
+            field,
+            "`scale` and `encoding` belong to image maps; a checker's cells are `size` wide",
+        );
+    }
+    let size = in_range(
+        &format!("{field}.checker.size"),
+        c.size.unwrap_or(1.0),
+        MIN_CELL,
+        MAX_MAGNITUDE,
+        "a positive length in [1e-100, 1e100]",
+    )?;
+    let colors = [
+        color(&format!("{field}.checker.colors[0]"), c.colors[0])?,
+        color(&format!("{field}.checker.colors[1]"), c.colors[1])?,
+    ];
+    Ok(Texture::Checker { size, colors })
+}
+
+/// The one colour that stands for a texture.
+fn mean(t: &Texture) -> DVec3 {
+    match t {
+        Texture::Checker { colors, .. } => (colors[0] + colors[1]) * 0.5,
+        Texture::Image { image, .. } => {
+            let top = &image.levels[image.levels.len() - 1].texels[0];
+            DVec3::from_array(top.map(f64::from))
+        }
+    }
+}
+
+/// Reads and decodes `path` (PNG or EXR by its name), and builds the pyramid.
+fn load(path: &Path, linear: bool) -> Result<Image, String> {
+    let started = std::time::Instant::now();
+    let name = path.to_string_lossy().to_lowercase();
+    let png = name.ends_with(".png");
+    if !png && !name.ends_with(".exr") {
+        return Err("unknown image format: the file name must end in .png or .exr".into());
+    }
+    if linear && !png {
+        return Err("`encoding` applies to PNG images; EXR values are linear already".into());
+    }
+    let bytes = read_regular(path)?;
+    let (width, height, texels) = match png {
+        true => png_texels(&bytes, linear)?,
+        false => exr_texels(&bytes)?,
+    };
+    let mut digest_input = bytes.clone();
+    digest_input.push(u8::from(linear));
+    Ok(Image {
+        file: path.to_owned(),
+        levels: pyramid(Level {
+            width,
+            height,
+            texels,
+        }),
+        digest: crate::sequence::mesh::fnv1a(&digest_input),
+        bytes: bytes.len() as u64,
+        load_seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// The file's bytes: a regular file only (a FIFO must not hang the load), at most
+/// `MAX_TEXTURE_BYTES`.
+fn read_regular(path: &Path) -> Result<Vec<u8>, String> {
+    use std::io::Read;
+    use std::os::unix::fs::OpenOptionsExt;
+    let f = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let meta = f
+        .metadata()
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    if !meta.is_file() {
+        return Err(format!(
+            "{} is not a regular file (a FIFO, device or directory cannot be a texture)",
+            path.display()
+        ));
+    }
+    if meta.len() > MAX_TEXTURE_BYTES {
+        return Err(format!(
+            "{} is {} bytes; texture files are limited to 1 GiB",
+            path.display(),
+            meta.len()
+        ));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    f.take(MAX_TEXTURE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    Ok(bytes)
+}
+
+fn check_size(width: u64, height: u64) -> Result<(u32, u32), String> {
+    if width == 0 || height == 0 {
+        return Err("the image is empty".into());
+    }
+    if width > u64::from(MAX_SIDE) || height > u64::from(MAX_SIDE) || width * height > MAX_TEXELS {
+        return Err(format!(
+            "the image is {width}x{height}; textures are limited to {MAX_SIDE} pixels a side and {MAX_TEXELS} pixels in all"
+        ));
+    }
+    Ok((width as u32, height as u32))
+}
+
+/// 8- or 16-bit PNG (grey, grey+alpha, RGB, RGBA or palette; alpha ignored) as linear RGB:
+/// each value v of bit depth b is x = v / (2^b − 1), sRGB-decoded unless `linear`.
+fn png_texels(bytes: &[u8], linear: bool) -> Result<(u32, u32, Vec<[f32; 3]>), String> {
+    use image::ImageDecoder;
+    let unreadable = |e: image::ImageError| format!("unreadable PNG: {e}");
+    let decoder =
+        image::codecs::png::PngDecoder::new(std::io::Cursor::new(bytes)).map_err(unreadable)?;
+    let (w, h) = decoder.dimensions();
+    let (w, h) = check_size(u64::from(w), u64::from(h))?;
+    let mut decoder = decoder;
+    decoder
+        .set_limits(image::Limits::no_limits())
+        .map_err(unreadable)?;
+    let rgb = image::DynamicImage::from_decoder(decoder)
+        .map_err(unreadable)?
+        .into_rgb16();
+    let table = decode_table(linear);
+    let texels = rgb
+        .pixels()
+        .map(|p| p.0.map(|v| table[usize::from(v)]))
+        .collect();
+    Ok((w, h, texels))
+}
+
+/// The linear value of each 16-bit code (8-bit codes arrive as v·257, the same fraction).
+fn decode_table(linear: bool) -> Vec<f32> {
+    (0..=65535u32)
+        .map(|v| {
+            let x = f64::from(v) / 65535.0;
+            let y = if linear {
+                x
+            } else if x <= 0.04045 {
+                x / 12.92
+            } else {
+                libm::pow((x + 0.055) / 1.055, 2.4)
+            };
+            y as f32
+        })
+        .collect()
+}
+
+/// An EXR's first layer with R, G and B channels, as f32 (values that are not finite, or
+/// negative, are refused: a texture is a reflectance).
+fn exr_texels(bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>), String> {
+    use exr::prelude::*;
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| format!("unreadable EXR: {e}"))?;
+    let Some(header) = meta.headers.first() else {
+        return Err("unreadable EXR: no layer".into());
+    };
+    let size = header.layer_size;
+    let (w, h) = check_size(size.width() as u64, size.height() as u64)?;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+            |(width, px): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                px[pos.y() * *width + pos.x()] = [r, g, b];
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| format!("unreadable EXR (it needs R, G and B channels): {e}"))?;
+    let texels = image.layer_data.channel_data.pixels.1;
+    if texels.iter().flatten().any(|v| !v.is_finite() || *v < 0.0) {
+        return Err(
+            "the EXR holds a negative, infinite or NaN value; a texture holds reflectances ≥ 0"
+                .into(),
+        );
+    }
+    Ok((w, h, texels))
+}
+
+/// Level k + 1 is ⌈w/2⌉ × ⌈h/2⌉; its texel (x, y) is the f32 sum
+/// ((a + b) + (c + d)) · 0.25 of level k's texels (2x, 2y), (2x+1, 2y), (2x, 2y+1),
+/// (2x+1, 2y+1), indices wrapping (mod width, mod height) as the texture repeats.
+pub fn pyramid(level0: Level) -> Vec<Level> {
+    let mut levels = vec![level0];
+    loop {
+        let l = &levels[levels.len() - 1];
+        if l.width == 1 && l.height == 1 {
+            return levels;
+        }
+        let (w, h) = (l.width.div_ceil(2), l.height.div_ceil(2));
+        let at = |x: u32, y: u32| l.texels[((y % l.height) * l.width + x % l.width) as usize];
+        let mut texels = Vec::with_capacity((w * h) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let (a, b) = (at(2 * x, 2 * y), at(2 * x + 1, 2 * y));
+                let (c, d) = (at(2 * x, 2 * y + 1), at(2 * x + 1, 2 * y + 1));
+                texels.push(std::array::from_fn(|i| {
+                    ((a[i] + b[i]) + (c[i] + d[i])) * 0.25
+                }));
+            }
+        }
+        levels.push(Level {
+            width: w,
+            height: h,
+            texels,
+        });
+    }
+}

@@ -1,0 +1,459 @@
+//! Texture lookups at hits, filtered over each ray's footprint so that one sample per pixel
+//! shows no moiré: the checker box-filtered analytically, images mip-mapped and trilinearly
+//! interpolated. The footprint is a ray cone (Amanatides 1984; Akenine-Möller et al. 2019):
+//! each ray carries its width at its origin and its spread, and its width at a hit is
+//! |width + spread·t|. The rules, operation by operation, are in docs/spec/texture.md.
+//!
+//! Everything here is scalar f64 per lane, from the lanes' values widened exactly, so a lane's
+//! colour is the same for every packet width.
+
+use super::World;
+use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
+use crate::scene::{Image, Level, Scene, Shape, Texture};
+use glam::{DVec2, DVec3};
+use std::f64::consts::PI;
+
+/// The footprint cones of a packet's rays: full width at the origin, and growth per unit
+/// length (radians, small-angle).
+#[derive(Clone, Copy)]
+pub(super) struct Cone<V: Lanes> {
+    pub width: V,
+    pub spread: V,
+}
+
+impl<V: Lanes> Cone<V> {
+    /// The eye rays' cone: width 0 at the eye, `spread` per unit length.
+    #[inline(always)]
+    pub(super) fn eye(spread: f64) -> Cone<V> {
+        Cone {
+            width: V::splat(0.0),
+            spread: V::splat(spread),
+        }
+    }
+
+    /// The full width at distance `t`: |width + spread·t|.
+    #[inline(always)]
+    pub(super) fn at(&self, t: V) -> V {
+        let w = self.width + self.spread * t;
+        w.copysign(V::splat(1.0))
+    }
+
+    /// The cone of the rays leaving the hits at distance `t`: the width there, and the spread
+    /// changed by a mirror whose normal turns by `curvature` (1/radius, 0 on flat surfaces)
+    /// per unit length: + 2·width·curvature off a convex side (`entering`), − off a concave
+    /// one. Transmitted rays keep their spread (`curvature` 0).
+    #[inline(always)]
+    pub(super) fn leaving(&self, t: V, curvature: V, entering: V::M) -> Cone<V> {
+        let width = self.at(t);
+        let turn = V::splat(2.0) * width * curvature;
+        Cone {
+            width,
+            spread: V::select(entering, self.spread + turn, self.spread - turn),
+        }
+    }
+
+    #[inline(always)]
+    pub(super) fn select(m: V::M, a: Cone<V>, b: Cone<V>) -> Cone<V> {
+        Cone {
+            width: V::select(m, a.width, b.width),
+            spread: V::select(m, a.spread, b.spread),
+        }
+    }
+}
+
+/// Each object's curvature for the cone: 1/radius for a sphere, 0 otherwise.
+pub(super) fn curvatures(world: &World) -> Vec<f64> {
+    let objects = &world.scene.objects;
+    objects
+        .iter()
+        .map(|o| match o.shape {
+            Shape::Sphere { radius, .. } => 1.0 / radius,
+            _ => 0.0,
+        })
+        .collect()
+}
+
+/// The curvature of each lane's object (`object` holds object indices).
+#[inline(always)]
+pub(super) fn curvature<V: Lanes>(world: &World, object: V) -> V {
+    let ids = object.array();
+    let table = &world.curvature;
+    V::from_fn(|k| table.get(ids[k] as usize).copied().unwrap_or(0.0))
+}
+
+/// One lane's hit as a lookup sees it.
+pub(super) struct At {
+    /// The hit point in world coordinates (`p + origin`, see `point`).
+    pub p: DVec3,
+    /// The unit normal facing the ray, and the ray's unit direction.
+    pub n: DVec3,
+    pub d: DVec3,
+    /// Half the footprint's width at the hit.
+    pub r: f64,
+    pub object: usize,
+    /// The triangle and its barycentrics (u, v) on a mesh.
+    pub prim: u32,
+    pub bary: (f64, f64),
+}
+
+/// The texture's colour at `at`, filtered over its footprint: the mean of the lookups at the
+/// footprint's taps.
+#[inline(never)]
+pub(super) fn color(world: &World, texture: &Texture, at: &At) -> DVec3 {
+    let scene = world.unshifted.as_deref().unwrap_or(&world.scene);
+    let p = point(scene, at);
+    let f = Footprint::of(at);
+    let mut sum = DVec3::ZERO;
+    for k in 0..f.taps {
+        let step = (f64::from(2 * k + 1) - f64::from(f.taps)) / f64::from(f.taps);
+        let centre = snap(scene, at, p + f.major * step);
+        let tap = Tap {
+            p: centre,
+            offset: centre - p,
+            minor: f.minor,
+            major: f.major / f64::from(f.taps),
+        };
+        sum += match texture {
+            Texture::Checker { size, colors } => checker(*size, colors, &tap),
+            Texture::Image { image, scale } => image_color(scene, image, *scale, at, &tap),
+        };
+    }
+    sum / f64::from(f.taps)
+}
+
+/// The point a lookup uses, from the scene in world coordinates: on a mesh the barycentric
+/// blend of the placed corners, elsewhere the hit; then `snap`ped.
+fn point(scene: &Scene, at: &At) -> DVec3 {
+    let p = match scene.objects[at.object].shape {
+        Shape::Mesh { mesh, place, .. } => {
+            let m = &scene.meshes[mesh];
+            let q = m.triangles[at.prim as usize].map(|i| place.point(m.positions[i as usize]));
+            let (b1, b2) = at.bary;
+            q[0] * (1.0 - b1 - b2) + q[1] * b1 + q[2] * b2
+        }
+        _ => at.p,
+    };
+    snap(scene, at, p)
+}
+
+/// `p` with each coordinate the surface holds constant set to that constant: a plane whose
+/// normal has one non-zero component i has coordinate i of its point everywhere; a placed
+/// triangle whose three corners share coordinate i, that coordinate. So a floor at y = 0 is
+/// looked up at y = 0 exactly, whatever the rounding of the hit or of a tap's offset.
+fn snap(scene: &Scene, at: &At, p: DVec3) -> DVec3 {
+    let mut p = p.to_array();
+    match scene.objects[at.object].shape {
+        Shape::Plane { point, normal, .. } => {
+            let n = normal.to_array();
+            let axes = n.iter().filter(|c| **c != 0.0).count();
+            if let (1, Some(i)) = (axes, n.iter().position(|c| *c != 0.0)) {
+                p[i] = point.to_array()[i];
+            }
+        }
+        Shape::Mesh { mesh, place, .. } => {
+            let m = &scene.meshes[mesh];
+            let q = m.triangles[at.prim as usize]
+                .map(|i| place.point(m.positions[i as usize]).to_array());
+            for i in 0..3 {
+                if q[0][i] == q[1][i] && q[1][i] == q[2][i] {
+                    p[i] = q[0][i];
+                }
+            }
+        }
+        Shape::Sphere { .. } => {}
+    }
+    DVec3::from_array(p)
+}
+
+/// Most taps a footprint is split into along its long axis.
+pub const MAX_TAPS: u32 = 16;
+
+/// The footprint: the disc of radius r across the ray projected along it onto the tangent
+/// plane, an ellipse with semi-axis vectors `minor` (across the plane of incidence, length r)
+/// and `major` (length r/|cos θ|), covered by `taps` ellipses side by side along `major`.
+struct Footprint {
+    minor: DVec3,
+    major: DVec3,
+    taps: u32,
+}
+
+impl Footprint {
+    fn of(at: &At) -> Footprint {
+        let (d, n) = (at.d, at.n);
+        let mut m = d.cross(n);
+        if m == DVec3::ZERO {
+            m = n.cross(DVec3::X);
+        }
+        if m == DVec3::ZERO {
+            m = n.cross(DVec3::Y);
+        }
+        let across = m.normalize();
+        let e2 = across.cross(d);
+        let minor = across * at.r;
+        let major = (e2 - d * (e2.dot(n) / d.dot(n))) * at.r;
+        let ratio = (major.length() / minor.length()).ceil();
+        let taps = if ratio >= 1.0 {
+            ratio.min(f64::from(MAX_TAPS)) as u32
+        } else {
+            1
+        };
+        Footprint { minor, major, taps }
+    }
+}
+
+/// One tap: its centre, its offset from the hit, and its ellipse's semi-axis vectors.
+struct Tap {
+    p: DVec3,
+    offset: DVec3,
+    minor: DVec3,
+    major: DVec3,
+}
+
+impl Tap {
+    /// The half-extent of the tap's ellipse along the unit vector `a`: √((minor·a)² + (major·a)²);
+    /// infinite when it is not finite.
+    fn extent(&self, a: DVec3) -> f64 {
+        let (x, y) = (self.minor.dot(a), self.major.dot(a));
+        let e = (x * x + y * y).sqrt();
+        if e.is_finite() { e } else { f64::INFINITY }
+    }
+}
+
+/// The checker averaged over the tap's bounding box: the product of three square waves,
+/// averaged axis by axis (their product's average over a box is the product of their
+/// averages); colour weights (1 ± A)/2.
+fn checker(size: f64, colors: &[DVec3; 2], tap: &Tap) -> DVec3 {
+    let axis = [DVec3::X, DVec3::Y, DVec3::Z];
+    let p = tap.p.to_array();
+    let mut a = 1.0;
+    for i in 0..3 {
+        a *= square_average(p[i] / size, tap.extent(axis[i]) / size);
+    }
+    colors[0] * (0.5 + 0.5 * a) + colors[1] * (0.5 - 0.5 * a)
+}
+
+/// Half-widths below this many cells count as 0.
+pub const TINY_BOX: f64 = 1e-12;
+
+/// The average over [x − h, x + h] of S(u) = +1 where ⌊u⌋ is even, −1 where it is odd.
+pub fn square_average(x: f64, h: f64) -> f64 {
+    if h.is_nan() || h == f64::INFINITY {
+        return 0.0;
+    }
+    let sign = |k: f64| {
+        if k - 2.0 * (k / 2.0).floor() == 0.0 {
+            1.0
+        } else {
+            -1.0
+        }
+    };
+    // A box this narrow is rounding noise (a floor's extent along its own normal): a point
+    // sample, so a surface lying on a cell boundary takes the cell above it.
+    if h < TINY_BOX {
+        return sign(x.floor());
+    }
+    let (a, b) = (x - h, x + h);
+    let (ka, kb) = (a.floor(), b.floor());
+    if ka == kb {
+        sign(ka)
+    } else if kb == ka + 1.0 {
+        (sign(ka) * (kb - a) + sign(kb) * (b - kb)) / (b - a)
+    } else {
+        (triangle(b) - triangle(a)) / (b - a)
+    }
+}
+
+/// ∫₀ᵘ S: the triangle wave f for f = u − 2⌊u/2⌋ < 1, else 2 − f.
+fn triangle(u: f64) -> f64 {
+    let f = u - 2.0 * (u / 2.0).floor();
+    if f < 1.0 { f } else { 2.0 - f }
+}
+
+/// The default direction of a plane's u: for a plane facing mostly along x (|n.x| > 0.5),
+/// (0, 0, −sign n.x), else +x; projected into the plane and made unit length.
+pub fn plane_u_axis(normal: DVec3, given: Option<DVec3>) -> DVec3 {
+    given.unwrap_or_else(|| {
+        let a = if normal.x.abs() > 0.5 {
+            DVec3::new(0.0, 0.0, -normal.x.signum())
+        } else {
+            DVec3::X
+        };
+        (a - normal * a.dot(normal)).normalize()
+    })
+}
+
+/// Texture coordinates (u, v) of the tap and its width in level-0 texels.
+fn coordinates(scene: &Scene, image: &Image, scale: DVec2, at: &At, tap: &Tap) -> (f64, f64, f64) {
+    let level0 = &image.levels[0];
+    let (w, h) = (f64::from(level0.width), f64::from(level0.height));
+    let (sx, sy) = (scale.x.abs(), scale.y.abs());
+    match scene.objects[at.object].shape {
+        Shape::Plane { normal, u_axis, .. } => {
+            let ua = plane_u_axis(normal, u_axis);
+            let va = normal.cross(ua);
+            let texels = (2.0 * tap.extent(ua) * sx * w).max(2.0 * tap.extent(va) * sy * h);
+            (tap.p.dot(ua), tap.p.dot(va), texels)
+        }
+        Shape::Sphere { center, radius } => {
+            let q = (tap.p - center).normalize();
+            let u = 0.5 - libm::atan2(q.z, q.x) / (2.0 * PI);
+            let v = 1.0 - libm::acos(q.y.clamp(-1.0, 1.0)) / PI;
+            let ring = (q.x * q.x + q.z * q.z).sqrt();
+            let across = if ring > 0.0 {
+                let t_u = DVec3::new(-q.z / ring, 0.0, q.x / ring);
+                2.0 * tap.extent(t_u) * sx * w / (2.0 * PI * radius * ring)
+            } else {
+                f64::INFINITY
+            };
+            let t_v = q.cross(DVec3::new(-q.z, 0.0, q.x)).normalize_or_zero();
+            let along = 2.0 * tap.extent(t_v) * sy * h / (PI * radius);
+            (u, v, across.max(along))
+        }
+        Shape::Mesh { mesh, place, .. } => {
+            let m = &scene.meshes[mesh];
+            let tri = m.triangles[at.prim as usize];
+            let uvs = m
+                .uvs
+                .as_ref()
+                .expect("checked at load: image maps need UVs");
+            let t = tri.map(|i| uvs[i as usize]);
+            let (b1, b2) = at.bary;
+            let q = tri.map(|i| place.point(m.positions[i as usize]));
+            let (e1, e2) = (q[1] - q[0], q[2] - q[0]);
+            // The tap's offset in the triangle's edge coordinates (least squares).
+            let (g11, g12, g22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+            let (r1, r2) = (tap.offset.dot(e1), tap.offset.dot(e2));
+            let det = g11 * g22 - g12 * g12;
+            let (alpha, beta) = ((g22 * r1 - g12 * r2) / det, (g11 * r2 - g12 * r1) / det);
+            let uv = t[0] * (1.0 - b1 - b2) + t[1] * b1 + t[2] * b2;
+            let uv = uv + (t[1] - t[0]) * alpha + (t[2] - t[0]) * beta;
+            let world_area = e1.cross(e2).length();
+            let uv_area = (t[1] - t[0]).perp_dot(t[2] - t[0]).abs();
+            let density = (w * h * sx * sy * uv_area / world_area).sqrt();
+            let reach = tap.minor.length().max(tap.major.length());
+            (uv.x, uv.y, density * (2.0 * reach))
+        }
+    }
+}
+
+/// The image at the tap: trilinear between the two mip levels around log2 of its width in
+/// texels.
+fn image_color(scene: &Scene, image: &Image, scale: DVec2, at: &At, tap: &Tap) -> DVec3 {
+    let (u, v, texels) = coordinates(scene, image, scale, at, tap);
+    let (u, v) = (u * scale.x, v * scale.y);
+    let last = image.levels.len() - 1;
+    let mean = |l: &Level| DVec3::from_array(l.texels[0].map(f64::from));
+    if !(u.is_finite() && v.is_finite()) {
+        return mean(&image.levels[last]);
+    }
+    let lod = if texels > 1.0 {
+        libm::log2(texels)
+    } else {
+        0.0
+    };
+    if lod.is_nan() || lod >= last as f64 {
+        return bilinear(&image.levels[last], u, v);
+    }
+    let l = lod.floor();
+    let f = lod - l;
+    let c = bilinear(&image.levels[l as usize], u, v);
+    if f == 0.0 {
+        return c;
+    }
+    c * (1.0 - f) + bilinear(&image.levels[l as usize + 1], u, v) * f
+}
+
+/// Bilinear interpolation at (u, v) repeated: texel (i, j)'s centre is at
+/// u = (i + 0.5)/width, v = 1 − (j + 0.5)/height (row 0 at the top, v = 1).
+pub fn bilinear(level: &Level, u: f64, v: f64) -> DVec3 {
+    let (w, h) = (f64::from(level.width), f64::from(level.height));
+    let x = (u - u.floor()) * w - 0.5;
+    let y = (1.0 - (v - v.floor())) * h - 0.5;
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let wrap = |i: f64, n: u32| (i as i64).rem_euclid(i64::from(n)) as u32;
+    let (i0, j0) = (wrap(x0, level.width), wrap(y0, level.height));
+    let (i1, j1) = ((i0 + 1) % level.width, (j0 + 1) % level.height);
+    let t = |i: u32, j: u32| {
+        DVec3::from_array(level.texels[(j * level.width + i) as usize].map(f64::from))
+    };
+    (t(i0, j0) * (1.0 - fx) + t(i1, j0) * fx) * (1.0 - fy)
+        + (t(i0, j1) * (1.0 - fx) + t(i1, j1) * fx) * fy
+}
+
+/// The colour of each lane whose `maps` entry is set, the others' `fallback`.
+#[inline(always)]
+pub(super) fn lanes<V: Lanes>(
+    world: &World,
+    maps: &[Option<&Texture>; MAX_LANES],
+    at: &[Option<At>; MAX_LANES],
+    fallback: V3<V>,
+) -> V3<V> {
+    let mut out = [DVec3::ZERO; MAX_LANES];
+    let mut any = 0u32;
+    for k in 0..V::N {
+        if let (Some(t), Some(at)) = (maps[k], &at[k]) {
+            out[k] = color(world, t, at);
+            any |= 1 << k;
+        }
+    }
+    if any == 0 {
+        return fallback;
+    }
+    V3::select(V::M::from_bits(any), V3::from_fn(|k| out[k]), fallback)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The box average is exact where the box stays in one cell, converges to 0 (the mean)
+    /// as the box grows, and matches a fine numerical average across boundaries.
+    #[test]
+    fn square_average_is_the_box_mean_of_the_square_wave() {
+        assert_eq!(square_average(0.25, 0.0), 1.0);
+        assert_eq!(square_average(1.25, 0.2), -1.0);
+        assert_eq!(square_average(-0.5, 0.1), -1.0);
+        assert_eq!(square_average(3.0, f64::INFINITY), 0.0);
+        assert_eq!(square_average(0.0, 1e-17), 1.0);
+        assert_eq!(square_average(-1e-300, 0.0), -1.0);
+        for (x, h) in [
+            (0.9, 0.3),
+            (2.0, 1.7),
+            (-3.3, 5.1),
+            (10.5, 0.75),
+            (0.0, 1e-9),
+            (0.0, 2e-12),
+        ] {
+            let n = 200_000;
+            let s = |u: f64| {
+                if u.floor().rem_euclid(2.0) == 0.0 {
+                    1.0
+                } else {
+                    -1.0
+                }
+            };
+            let numeric = (0..n)
+                .map(|i| s(x - h + 2.0 * h * (i as f64 + 0.5) / n as f64))
+                .sum::<f64>()
+                / n as f64;
+            let got = square_average(x, h);
+            assert!(
+                (got - numeric).abs() < 1e-4,
+                "({x}, {h}): {got} vs {numeric}"
+            );
+        }
+        assert!(square_average(0.3, 1e6).abs() < 1e-6);
+    }
+
+    #[test]
+    fn default_plane_axes_keep_images_upright() {
+        assert_eq!(plane_u_axis(DVec3::Y, None), DVec3::X);
+        assert_eq!(DVec3::Y.cross(plane_u_axis(DVec3::Y, None)), -DVec3::Z);
+        let wall = DVec3::Z;
+        assert_eq!(wall.cross(plane_u_axis(wall, None)), DVec3::Y);
+        for n in [DVec3::X, -DVec3::X] {
+            assert_eq!(n.cross(plane_u_axis(n, None)), DVec3::Y, "{n}");
+        }
+    }
+}
