@@ -19,6 +19,7 @@ pub mod output;
 mod pattern;
 mod plan;
 mod progress;
+mod regular;
 pub mod scene;
 pub mod schedule;
 pub mod sequence;

@@ -85,25 +85,72 @@ fn sort_attributes(bytes: &mut [u8]) -> std::result::Result<(), EncodeError> {
 
 /// Byte ranges of the header's attributes (name, type, size, value) of a single-part file.
 fn attribute_spans(bytes: &[u8]) -> Option<Vec<(usize, usize)>> {
-    let until_nul = |from: usize| -> Option<usize> {
-        Some(from + bytes.get(from..)?.iter().position(|&b| b == 0)?)
-    };
     let mut spans = Vec::new();
     let mut at = 8; // magic number and version
     loop {
-        let name_end = until_nul(at)?;
-        if name_end == at {
+        let attribute = attribute_at(bytes, at)?;
+        if attribute.name.is_empty() {
             return Some(spans);
         }
-        let type_end = until_nul(name_end + 1)?;
-        let size = bytes.get(type_end + 1..type_end + 5)?;
-        let size = i32::from_le_bytes(size.try_into().ok()?);
-        let end = type_end + 5 + usize::try_from(size).ok()?;
-        if end > bytes.len() {
+        spans.push((at, attribute.end));
+        at = attribute.end;
+    }
+}
+
+/// One header attribute, as stored.
+struct Attribute<'a> {
+    name: &'a [u8],
+    kind: &'a [u8],
+    value: &'a [u8],
+    /// Where the next one starts.
+    end: usize,
+}
+
+/// The attribute that starts at `at` (an empty name: the header's end), or `None` when it
+/// does not fit in `bytes`.
+fn attribute_at(bytes: &[u8], at: usize) -> Option<Attribute<'_>> {
+    let until_nul = |from: usize| -> Option<usize> {
+        Some(from + bytes.get(from..)?.iter().position(|&b| b == 0)?)
+    };
+    let name_end = until_nul(at)?;
+    let name = &bytes[at..name_end];
+    if name.is_empty() {
+        return Some(Attribute {
+            name,
+            kind: &[],
+            value: &[],
+            end: at + 1,
+        });
+    }
+    let type_end = until_nul(name_end + 1)?;
+    let size = bytes.get(type_end + 1..type_end + 5)?;
+    let size = i32::from_le_bytes(size.try_into().ok()?);
+    let end = type_end + 5 + usize::try_from(size).ok()?;
+    Some(Attribute {
+        name,
+        kind: &bytes[name_end + 1..type_end],
+        value: bytes.get(type_end + 5..end)?,
+        end,
+    })
+}
+
+/// The fingerprint attribute of an EXR header, read from the start of a file (the header is
+/// its first few kilobytes); `None` when it is not an EXR file or has no such attribute there.
+pub(crate) fn header_fingerprint(head: &[u8]) -> Option<String> {
+    const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+    if head.get(..4)? != MAGIC {
+        return None;
+    }
+    let mut at = 8;
+    loop {
+        let attribute = attribute_at(head, at)?;
+        if attribute.name.is_empty() {
             return None;
         }
-        spans.push((at, end));
-        at = end;
+        if attribute.name == fingerprint::KEY.as_bytes() && attribute.kind == b"string" {
+            return Some(String::from_utf8_lossy(attribute.value).into_owned());
+        }
+        at = attribute.end;
     }
 }
 
@@ -131,7 +178,7 @@ pub(crate) fn inspect(bytes: &[u8], expected: &Expected) -> Existing {
     let Some(AttributeValue::Text(fingerprint)) =
         layer.attributes.other.get(&Text::from(fingerprint::KEY))
     else {
-        return Existing::Foreign;
+        return Existing::Foreign(super::png::NO_FINGERPRINT.into());
     };
     let (w, h) = (layer.size.width(), layer.size.height());
     if (w, h) != (expected.width as usize, expected.height as usize) {

