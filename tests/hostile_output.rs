@@ -132,3 +132,42 @@ fn anything_but_a_file_at_a_claims_name_stops_the_run_naming_it() {
         std::fs::remove_file(&claim).unwrap();
     }
 }
+
+#[test]
+fn a_failing_stderr_loses_lines_not_frames() {
+    let tmp = with_clean_render("full-stderr", &small());
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap()
+    };
+    for (dir, extra) in [("lines", &[][..]), ("json", &["--progress", "json"][..])] {
+        let pattern = format!("{dir}/f_####.png");
+        let run = bin()
+            .args(["render", "seq.yaml", "-o", &pattern])
+            .args(extra)
+            .current_dir(&tmp)
+            .stderr(full())
+            .output()
+            .unwrap();
+        // Once: "failed printing to stderr", exit 101 and no frame.
+        assert_eq!(run.status.code(), Some(0), "{dir}");
+        assert_same_files(&tmp.join(dir), &tmp.join("clean"));
+    }
+    // An error still ends with its exit code.
+    let run = bin()
+        .args(["render", "missing.yaml"])
+        .current_dir(&tmp)
+        .stderr(full())
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    let run = bin()
+        .args(["render", "--no-such-flag"])
+        .current_dir(&tmp)
+        .stderr(full())
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+}
