@@ -132,16 +132,16 @@ impl Progress {
     /// Frames other processes hold, and the first few of their claims: shown even with
     /// `--quiet`, since a worker that waits must say on what.
     pub(crate) fn waiting(&self, frames: &str, count: usize, claims: &[Held]) {
-        let age = |h: &Held| h.heartbeat.map_or(-1.0, |a| a.as_secs_f64());
         if let Mode::Json = self.mode {
             let claims: Vec<String> = claims
                 .iter()
                 .map(|h| {
                     format!(
-                        "{{\"path\": {}, \"owner\": {}, \"heartbeat_seconds\": {:.0}}}",
+                        "{{\"path\": {}, \"owner\": {}, \"heartbeat_seconds\": {}}}",
                         quote(&h.path.display().to_string()),
                         quote(&h.owner),
-                        age(h)
+                        h.heartbeat
+                            .map_or("null".into(), |a| format!("{:.0}", a.as_secs_f64()))
                     )
                 })
                 .collect();
@@ -154,13 +154,14 @@ impl Progress {
         }
         let claims: Vec<String> = claims
             .iter()
-            .map(|h| {
-                format!(
+            .map(|h| match h.heartbeat {
+                Some(age) => format!(
                     "{} ({}, heartbeat {:.0} s ago)",
                     h.path.display(),
                     h.owner,
-                    age(h)
-                )
+                    age.as_secs_f64()
+                ),
+                None => format!("{} (released just now)", h.path.display()),
             })
             .collect();
         let more = count.saturating_sub(claims.len());

@@ -171,3 +171,68 @@ fn a_failing_stderr_loses_lines_not_frames() {
         .unwrap();
     assert_eq!(run.status.code(), Some(2));
 }
+
+#[test]
+fn one_sigterm_while_waiting_on_a_claim_stops_with_the_frames_written() {
+    let tmp = scratch("claim-sigterm");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let out = tmp.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    // Held by this test process: alive, so the run waits on it.
+    std::fs::write(out.join(".f_0002.png.rayreel-claim"), my_claim_owner()).unwrap();
+    let args = [&["render"], &FRAMES[..], &["--claim", "--threads", "1"]].concat();
+    let mut child = start(&tmp, &args);
+    let err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufRead::lines(err) {
+            let _ = tx.send(line.unwrap());
+        }
+    });
+    let mut log = String::new();
+    loop {
+        match rx.recv_timeout(std::time::Duration::from_secs(30)) {
+            Ok(line) => {
+                log += &line;
+                log.push('\n');
+                if line.contains("waiting for 1 frame (2)") {
+                    break;
+                }
+            }
+            Err(e) => {
+                child.kill().unwrap();
+                panic!("the worker did not wait: {e}: {log}");
+            }
+        }
+    }
+    let sent = std::time::Instant::now();
+    signal(&child, libc::SIGTERM);
+    let run = ends_within(child, 10.0, "after SIGTERM");
+    assert!(sent.elapsed().as_secs_f64() < 3.0);
+    while let Ok(line) = rx.recv_timeout(std::time::Duration::from_secs(1)) {
+        log += &line;
+        log.push('\n');
+    }
+    assert_eq!(run.status.code(), Some(143), "{log}");
+    assert!(
+        log.contains("rayreel: stopping on SIGTERM: no frame is in flight"),
+        "{log}"
+    );
+    // The closing line agrees with what was written (it once said 0).
+    assert!(log.contains("rendered 3 frames in"), "{log}");
+    assert!(
+        log.contains("rayreel: interrupted: 3 frames written in this run"),
+        "{log}"
+    );
+    let written: Vec<String> = files(&out);
+    assert_eq!(
+        written,
+        [
+            ".f_0002.png.rayreel-claim",
+            "f_0000.png",
+            "f_0001.png",
+            "f_0003.png"
+        ],
+        "{log}"
+    );
+}

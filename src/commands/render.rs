@@ -204,10 +204,24 @@ fn cooperate(
             },
             progress,
         )?;
-        let Outcome::Complete { written: w, held } = outcome else {
-            return Ok(outcome);
+        let held = match outcome {
+            Outcome::Complete { written: w, held } => {
+                written += w;
+                held
+            }
+            // A signal while waiting on other processes' claims stops the pass that follows:
+            // what the earlier passes wrote counts too.
+            Outcome::Interrupted {
+                written: w,
+                streamed,
+            } => {
+                return Ok(Outcome::Interrupted {
+                    written: written + w,
+                    streamed,
+                });
+            }
+            other => return Ok(other),
         };
-        written += w;
         if signals::interrupted() {
             return Ok(Outcome::Interrupted {
                 written,
