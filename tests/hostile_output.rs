@@ -236,3 +236,62 @@ fn one_sigterm_while_waiting_on_a_claim_stops_with_the_frames_written() {
         "{log}"
     );
 }
+
+/// A still camera, so that a change of fps changes no pixel, at `fps` (YAML).
+fn still_at(fps: &str) -> String {
+    format!(
+        "render: {{ width: 16, height: 9 }}\n{SCENE}timeline:\n  fps: {fps}\n  duration: 10\n  keyframes:\n    - {{ time: 0, position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }}\n"
+    )
+}
+
+/// The header attribute `name` of type `kind` in an EXR file: its value bytes.
+fn exr_attribute<'a>(bytes: &'a [u8], name: &str, kind: &str) -> &'a [u8] {
+    let key = format!("{name}\0{kind}\0");
+    let at = bytes
+        .windows(key.len())
+        .position(|w| w == key.as_bytes())
+        .unwrap_or_else(|| panic!("no {name}"))
+        + key.len();
+    let size = i32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+    &bytes[at + 4..at + 4 + size]
+}
+
+fn frames_per_second(path: &Path) -> (i32, u32) {
+    let bytes = std::fs::read(path).unwrap();
+    let v = exr_attribute(&bytes, "framesPerSecond", "rational");
+    (
+        i32::from_le_bytes(v[..4].try_into().unwrap()),
+        u32::from_le_bytes(v[4..8].try_into().unwrap()),
+    )
+}
+
+#[test]
+fn exr_frame_rates_are_exact_and_a_new_rate_makes_frames_stale() {
+    let tmp = scratch("exr-fps");
+    let args = ["seq.yaml", "-o", "out/f_####.exr", "--frames", "1-2"];
+    let frame = tmp.join("out/f_0001.exr");
+    // As written; the same rate written otherwise; a decimal as written, in lowest terms.
+    for (fps, stored, before) in [
+        ("30000/1001", (30000, 1001), None),
+        ("60000/2002", (30000, 1001), Some("up to date  1-2")),
+        // The pixels are the same at any rate (the camera holds still), but the header's
+        // `framesPerSecond` and `rayreel:time` are not: the frames are stale.
+        ("23.976", (2997, 125), Some("stale       1-2")),
+        ("0.5", (1, 2), Some("stale       1-2")),
+    ] {
+        std::fs::write(tmp.join("seq.yaml"), still_at(fps)).unwrap();
+        if let Some(expect) = before {
+            let status = run_in(&tmp, &[&["status"], &args[..]].concat());
+            let listing = String::from_utf8_lossy(&status.stdout);
+            assert!(listing.contains(expect), "{fps}: {listing}");
+        }
+        let run = run_in(&tmp, &[&["render"], &args[..]].concat());
+        assert!(run.status.success(), "{}", stderr(&run));
+        assert_eq!(frames_per_second(&frame), stored, "{fps}");
+        let bytes = std::fs::read(&frame).unwrap();
+        let time = exr_attribute(&bytes, "rayreel:time", "double");
+        let time = f64::from_le_bytes(time.try_into().unwrap());
+        let exact = f64::from(stored.1) / f64::from(stored.0);
+        assert!((time - exact).abs() <= 1e-15 * exact, "{fps}: {time}");
+    }
+}
