@@ -19,6 +19,8 @@ pub(crate) struct Progress {
     /// Frames reported up to date or foreign, and frames that failed.
     skipped: Cell<u64>,
     failed: Cell<u64>,
+    /// Whether a frame's colour beyond the largest half float has been reported.
+    half_overflow_told: Cell<bool>,
     start: Instant,
 }
 
@@ -45,6 +47,7 @@ impl Progress {
             done: 0,
             skipped: Cell::new(0),
             failed: Cell::new(0),
+            half_overflow_told: Cell::new(false),
             start: Instant::now(),
         }
     }
@@ -127,6 +130,19 @@ impl Progress {
             Mode::Json => eprintln!("{{\"event\": \"warning\", \"text\": {}}}", quote(text)),
             _ => eprintln!("{}", printable(text)),
         }
+    }
+
+    /// The first frame of the run whose colour went beyond the largest half float (65504) and
+    /// was clamped to it: a warning, once a run.
+    pub(crate) fn half_overflow(&self, n: u64, path: &str, samples: u64) {
+        if self.half_overflow_told.replace(true) {
+            return;
+        }
+        self.warn(&format!(
+            "warning: frame {n} ({path}): {samples} colour sample{} beyond 65504, the largest half float, {} stored as 65504 instead of infinity; later frames are clamped alike without a word (use --exr-precision float to keep such values)",
+            if samples == 1 { "" } else { "s" },
+            if samples == 1 { "was" } else { "were" }
+        ));
     }
 
     /// Frames other processes hold, and the first few of their claims: shown even with

@@ -295,3 +295,62 @@ fn exr_frame_rates_are_exact_and_a_new_rate_makes_frames_stale() {
         assert!((time - exact).abs() <= 1e-15 * exact, "{fps}: {time}");
     }
 }
+
+#[test]
+fn half_floats_hold_65504_where_the_light_is_brighter_with_one_warning() {
+    let tmp = scratch("half-inf");
+    let yaml = small().replace(
+        "diffuse: [1, 1, 1], specular: [1, 1, 1] }",
+        "diffuse: [1000000, 1000000, 1000000], specular: [1, 1, 1] }",
+    );
+    assert!(yaml.contains("1000000"));
+    std::fs::write(tmp.join("seq.yaml"), yaml).unwrap();
+    let run = run_in(
+        &tmp,
+        &[
+            "render",
+            "seq.yaml",
+            "-o",
+            "out/f_####.exr",
+            "--frames",
+            "0-1",
+        ],
+    );
+    let log = stderr(&run);
+    assert!(run.status.success(), "{log}");
+    assert_eq!(log.matches("beyond 65504").count(), 1, "{log}");
+    assert!(log.contains("warning: frame 0 (out/f_0000.exr): "), "{log}");
+    assert!(log.contains("stored as 65504 instead of infinity"), "{log}");
+    for n in 0..2 {
+        let image =
+            exr::prelude::read_all_flat_layers_from_file(tmp.join(format!("out/f_000{n}.exr")))
+                .unwrap();
+        let mut top = 0f32;
+        for channel in &image.layer_data[0].channel_data.list {
+            for v in channel.sample_data.values_as_f32() {
+                assert!(v.is_finite(), "frame {n}: {v}");
+                top = top.max(v);
+            }
+        }
+        assert_eq!(top, 65504.0, "frame {n}");
+    }
+    // 32-bit floats hold the values themselves, without a warning.
+    let run = run_in(
+        &tmp,
+        &[
+            "render",
+            "seq.yaml",
+            "-o",
+            "float/f_####.exr",
+            "--frames",
+            "0",
+            "--exr-precision",
+            "float",
+        ],
+    );
+    assert!(
+        run.status.success() && !stderr(&run).contains("65504"),
+        "{}",
+        stderr(&run)
+    );
+}

@@ -1,8 +1,8 @@
 //! OpenEXR frames: the linear, unclamped colour as R, G, B (half floats by default, 32-bit on
-//! request), premultiplied by A when the frame has alpha, an optional Z channel (planar depth,
-//! 1e10 for background, always 32-bit), ZIP compression, and header attributes for the
-//! frame number, time, fps (an exact fraction), fingerprint and the standard `worldToCamera`
-//! and `worldToNDC`.
+//! request; beyond the largest half, 65504, a half holds 65504), premultiplied by A when the
+//! frame has alpha, an optional Z channel (planar depth, 1e10 for background, always 32-bit),
+//! ZIP compression, and header attributes for the frame number, time, fps (an exact
+//! fraction), fingerprint and the standard `worldToCamera` and `worldToNDC`.
 
 use super::fingerprint;
 use super::format::{EncodeError, Existing, Expected, ExrPrecision, FileFormat};
@@ -11,15 +11,28 @@ use crate::frame::Frame;
 use exr::prelude::*;
 use std::io::Cursor;
 
+/// The largest finite half float.
+pub(crate) const MAX_HALF: f32 = 65504.0;
+
+/// The file's bytes, and how many colour samples were beyond the largest half float and hold
+/// it instead (half precision only; +Inf would poison every filter downstream).
 pub(crate) fn encode(
     frame: &Frame,
     precision: ExrPrecision,
     meta: &FrameMeta,
-) -> std::result::Result<Vec<u8>, EncodeError> {
+) -> std::result::Result<(Vec<u8>, u64), EncodeError> {
     let (w, h) = (frame.width as usize, frame.height as usize);
     let plane = |c: usize| -> Vec<f32> { frame.rgb.iter().skip(c).step_by(3).copied().collect() };
+    let clamped = std::cell::Cell::new(0u64);
+    let half = |v: f32| {
+        if v.abs() > MAX_HALF {
+            clamped.set(clamped.get() + 1);
+            return f16::from_f32(v.clamp(-MAX_HALF, MAX_HALF));
+        }
+        f16::from_f32(v)
+    };
     let samples = |v: Vec<f32>| match precision {
-        ExrPrecision::Half => FlatSamples::F16(v.into_iter().map(f16::from_f32).collect()),
+        ExrPrecision::Half => FlatSamples::F16(v.into_iter().map(half).collect()),
         ExrPrecision::Float => FlatSamples::F32(v),
     };
     let mut channels = SmallVec::<[AnyChannel<FlatSamples>; 4]>::new();
@@ -61,7 +74,7 @@ pub(crate) fn encode(
     Image::from_layer(layer).write().to_buffered(&mut out)?;
     let mut bytes = out.into_inner();
     sort_attributes(&mut bytes)?;
-    Ok(bytes)
+    Ok((bytes, clamped.get()))
 }
 
 /// The exr crate writes custom attributes in hash-map order, which differs from process to

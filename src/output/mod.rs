@@ -19,12 +19,13 @@ pub(crate) use identity::{Files, FrameMeta, RunIdentity};
 use crate::frame::Frame;
 use std::path::Path;
 
-/// The bytes of `frame`'s file in `format`, recording `meta`.
+/// The bytes of `frame`'s file in `format`, recording `meta`, and how many colour samples
+/// were beyond the largest half float and hold it instead (EXR half only).
 pub(crate) fn encode_file(
     frame: &Frame,
     format: &FileFormat,
     meta: &FrameMeta,
-) -> Result<Vec<u8>, EncodeError> {
+) -> Result<(Vec<u8>, u64), EncodeError> {
     match *format {
         FileFormat::Png {
             sixteen_bit,
@@ -35,7 +36,7 @@ pub(crate) fn encode_file(
                 ("rayreel:frame", meta.frame.to_string()),
                 ("rayreel:time", format!("{}", meta.time)),
             ];
-            png::encode(frame, sixteen_bit, compression, &text)
+            Ok((png::encode(frame, sixteen_bit, compression, &text)?, 0))
         }
         FileFormat::Exr { precision } => exr::encode(frame, precision, meta),
     }
