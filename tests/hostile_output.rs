@@ -354,3 +354,32 @@ fn half_floats_hold_65504_where_the_light_is_brighter_with_one_warning() {
         stderr(&run)
     );
 }
+
+#[test]
+fn numbers_in_messages_are_exact_and_short() {
+    let tmp = scratch("exact-numbers");
+    for (field, value, said) in [
+        (
+            "shutter",
+            "360.0001",
+            "must be an angle in [0, 360] degrees (0: no motion blur, 180: film) (got 360.0001)",
+        ),
+        ("shutter", "-1e-300", "(got -1e-300)"),
+        ("shutter", "360.00000000000006", "(got 360.00000000000006)"),
+        ("shutter", "1e300", "(got 1e300)"),
+        ("exposure", "-1000000000000000000000.5", "(got -1e21)"),
+        (
+            "exposure",
+            "64.00000000000001",
+            "must be within ±64 stops (got 64.00000000000001)",
+        ),
+    ] {
+        let yaml = small().replace("render: {", &format!("render: {{ {field}: {value},"));
+        std::fs::write(tmp.join("seq.yaml"), yaml).unwrap();
+        let out = run_in(&tmp, &["check", "seq.yaml"]);
+        let log = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{value}: {log}");
+        assert!(log.contains(said), "{value}: {log}");
+        assert!(log.len() < 400, "{value}: {log}");
+    }
+}
