@@ -383,3 +383,42 @@ fn numbers_in_messages_are_exact_and_short() {
         assert!(log.len() < 400, "{value}: {log}");
     }
 }
+
+#[test]
+fn the_ffmpeg_line_names_files_with_newlines_and_tabs_exactly() {
+    let tmp = scratch("ffmpeg-quoting");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let dir = "it's\tmy\nframes";
+    let pattern = format!("{dir}/f_####.png");
+    let out = run_in(
+        &tmp,
+        &[
+            "render",
+            "seq.yaml",
+            "-o",
+            &pattern,
+            "--frames",
+            "0",
+            "--print-ffmpeg",
+            "-q",
+        ],
+    );
+    let log = stderr(&out);
+    assert!(out.status.success(), "{log}");
+    assert!(tmp.join(dir).join("f_0000.png").is_file());
+    let line = log
+        .lines()
+        .find(|l| l.starts_with("ffmpeg "))
+        .unwrap_or_else(|| panic!("{log}"));
+    // Pasted into bash, with ffmpeg standing in for a function that prints its arguments.
+    let script = format!("ffmpeg() {{ printf '%s\\0' \"$@\"; }}\n{line}\n");
+    let run = sh(&tmp, &script);
+    assert!(run.status.success(), "{line}: {}", stderr(&run));
+    let words: Vec<String> = String::from_utf8(run.stdout)
+        .unwrap()
+        .split('\0')
+        .map(str::to_string)
+        .collect();
+    let input = words.iter().position(|w| w == "-i").expect("-i") + 1;
+    assert_eq!(words[input], format!("{dir}/f_%04d.png"), "{line}");
+}
