@@ -9,13 +9,46 @@
 //! than the one that wrote the claim (its start time or the boot id differ: pid reuse, a
 //! container restarted with the same host name). So a crashed process or machine leaves no
 //! hole and nothing waits forever.
+//!
+//! Claims are read without blocking and never through a link, only when they are regular
+//! files, and only their first `CLAIM_BYTES`: a FIFO, a device or a link at a claim's name
+//! makes `try_claim` fail with an error naming it (nothing is removed that rayreel did not
+//! write), and a huge file is read no further than an owner line can reach.
 
 use crate::output::atomic::{alive, hostname, sidecar};
+use crate::regular::{self, Links, Refused};
 use std::fs::{self, OpenOptions};
 use std::io::Write;
 use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, SystemTime};
+
+/// The most of a claim file ever read: an owner line is under 200 bytes.
+const CLAIM_BYTES: u64 = 4096;
+
+/// The owner line of the claim at `path`: `Ok(None)` when the claim is gone, an error when
+/// something other than a regular file stands at its name.
+fn owner_line(path: &Path) -> std::io::Result<Option<String>> {
+    let text = |bytes: Vec<u8>| String::from_utf8_lossy(&bytes).trim().to_string();
+    match regular::open(path, Links::Refuse) {
+        Ok((f, meta)) => Ok(Some(
+            regular::read_at_most(&f, meta.len(), CLAIM_BYTES)
+                .map(text)
+                .unwrap_or_default(),
+        )),
+        Err(Refused::Missing) => Ok(None),
+        Err(Refused::NotRegular(what)) => Err(std::io::Error::other(format!(
+            "{what} stands at the claim's name, where rayreel only ever writes regular files; remove it"
+        ))),
+        // Unreadable (permissions): an owner unknown, judged by its heartbeat alone.
+        Err(Refused::Io(_)) => Ok(Some(String::new())),
+    }
+}
+
+/// The owner line of the claim at `path`, or `""` when it cannot be read as one.
+fn read_owner(path: &Path) -> String {
+    owner_line(path).ok().flatten().unwrap_or_default()
+}
 
 pub(crate) struct Claims {
     timeout: Duration,
@@ -113,10 +146,10 @@ impl Claims {
                     return Ok(Attempt::Claimed);
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    let holder = fs::read_to_string(&path)
-                        .unwrap_or_default()
-                        .trim()
-                        .to_string();
+                    // Gone since: race for it again.
+                    let Some(holder) = owner_line(&path)? else {
+                        continue;
+                    };
                     if !self.is_stale(&path, &holder) {
                         return Ok(Attempt::Held(holder));
                     }
@@ -141,10 +174,10 @@ impl Claims {
     /// Shows the owner is alive: refreshes the claim's modification time.
     pub(crate) fn heartbeat(&self, frame: &Path) {
         let path = Claims::path(frame);
-        // Never through a link someone put in the claim's place.
+        // Never through a link someone put in the claim's place, never waiting on a FIFO.
         let opened = OpenOptions::new()
             .append(true)
-            .custom_flags(libc::O_NOFOLLOW)
+            .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK)
             .open(&path);
         if let Ok(f) = opened {
             let _ = f.set_modified(SystemTime::now());
@@ -153,7 +186,7 @@ impl Claims {
 
     pub(crate) fn release(&self, frame: &Path) {
         let path = Claims::path(frame);
-        if fs::read_to_string(&path).is_ok_and(|h| h.trim() == self.owner) {
+        if read_owner(&path) == self.owner {
             let _ = fs::remove_file(path);
         }
     }
@@ -166,7 +199,7 @@ impl Claims {
 
 /// How long ago the claim at `path` was last refreshed.
 fn heartbeat_age(path: &Path) -> Option<Duration> {
-    let modified = fs::metadata(path).and_then(|m| m.modified()).ok()?;
+    let modified = fs::symlink_metadata(path).and_then(|m| m.modified()).ok()?;
     Some(
         SystemTime::now()
             .duration_since(modified)
@@ -188,10 +221,7 @@ pub(crate) struct Held {
 pub(crate) fn held(frame: &Path) -> Held {
     let path = Claims::path(frame);
     Held {
-        owner: fs::read_to_string(&path)
-            .unwrap_or_default()
-            .trim()
-            .to_string(),
+        owner: read_owner(&path),
         heartbeat: heartbeat_age(&path),
         path,
     }

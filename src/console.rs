@@ -1,5 +1,6 @@
-//! Text for people: stdout where a reader that has gone is a normal end, and strings from
-//! files and command lines made safe to show on a terminal.
+//! Text for people: stdout where a reader that has gone is a normal end, stderr where a
+//! failing write is a lost line and never a reason to stop, and strings from files and
+//! command lines made safe to show on a terminal.
 
 use std::borrow::Cow;
 use std::io::{ErrorKind, Write};
@@ -39,6 +40,19 @@ fn line(event: &str, text: &str) {
         true => eprintln!("{{\"event\": \"{event}\", \"text\": {}}}", quote(text)),
         false => eprintln!("{}", printable(text)),
     }
+}
+
+/// One line on stderr (what `eprintln!` does in this crate). A stderr that cannot be written
+/// (full, closed, a terminal gone) loses the line and nothing else: rendering goes on.
+pub fn stderr_line(args: std::fmt::Arguments) {
+    let mut line = args.to_string();
+    line.push('\n');
+    stderr_write(&line);
+}
+
+/// `text` on stderr, as it is, in one write; a failure is ignored (see `stderr_line`).
+pub fn stderr_write(text: &str) {
+    let _ = std::io::stderr().lock().write_all(text.as_bytes());
 }
 
 /// Writes `text` to stdout. A reader that has gone (`rayreel status FILE | head -1`) ends the

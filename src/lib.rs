@@ -7,6 +7,19 @@
 //! are `pub` are re-exported by a public module (`tracer` re-exports `settings`' types,
 //! `tools::preview` `frameset::evenly_spaced`) or named in its public signatures.
 
+/// Every `eprintln!` in this crate is this one, not std's: a stderr that fails (a full disk
+/// under a farm's log, a closed terminal) is a lost console, never a reason to stop, so the
+/// line is written and a failure ignored where std's would panic. Defined ahead of the
+/// modules, so it shadows std's in every one of them.
+macro_rules! eprintln {
+    () => {
+        $crate::console::stderr_write("\n")
+    };
+    ($($arg:tt)*) => {
+        $crate::console::stderr_line(format_args!($($arg)*))
+    };
+}
+
 pub mod camera;
 mod claim;
 pub mod cli;
@@ -19,6 +32,7 @@ pub mod output;
 mod pattern;
 mod plan;
 mod progress;
+mod regular;
 pub mod scene;
 pub mod schedule;
 pub mod sequence;

@@ -10,7 +10,9 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             let code = e.exit_code();
-            eprintln!("{}", rayreel::console::error_line(&e.to_string(), code));
+            // A stderr that cannot be written loses the message, not the exit code.
+            let line = rayreel::console::error_line(&e.to_string(), code);
+            rayreel::console::stderr_line(format_args!("{line}"));
             ExitCode::from(code)
         }
     }
@@ -25,6 +27,9 @@ fn usage(e: &clap::Error) -> ExitCode {
     }
     let text = e.render().to_string();
     let text = text.strip_prefix("error: ").unwrap_or(&text);
-    eprint!("rayreel: {}", rayreel::console::printable_lines(text));
+    rayreel::console::stderr_write(&format!(
+        "rayreel: {}",
+        rayreel::console::printable_lines(text)
+    ));
     ExitCode::from(2)
 }

@@ -19,7 +19,8 @@ pub(crate) enum State {
     Stale,
     Missing,
     Corrupt(String),
-    Foreign,
+    /// Someone else's file (why, in words), left alone unforced.
+    Foreign(String),
 }
 
 /// Every selected frame, by the state of its file.
@@ -32,6 +33,8 @@ pub(crate) struct Plan {
     pub(crate) foreign: FrameSet,
     /// What is wrong with each corrupt file.
     pub(crate) why: Vec<(u64, String)>,
+    /// What each foreign file is.
+    pub(crate) why_foreign: Vec<(u64, String)>,
     pub(crate) force: bool,
 }
 
@@ -69,7 +72,7 @@ pub(crate) fn plan(seq: &Sequence, frames: &FrameSet, files: &Files, force: bool
                 };
                 match output::inspect(&files.frame_path(n), &expected) {
                     Existing::Missing => State::Missing,
-                    Existing::Foreign => State::Foreign,
+                    Existing::Foreign(why) => State::Foreign(why),
                     Existing::Corrupt(why) => State::Corrupt(why),
                     Existing::Ours(f) if ours(&f) => State::UpToDate,
                     Existing::Damaged { fingerprint, why } if ours(&fingerprint) => {
@@ -137,7 +140,10 @@ impl Plan {
                 self.why.push((n, why));
                 &mut self.corrupt
             }
-            State::Foreign => &mut self.foreign,
+            State::Foreign(why) => {
+                self.why_foreign.push((n, why));
+                &mut self.foreign
+            }
         };
         match after.is_some() && set.last() == after {
             true => set.push(n),

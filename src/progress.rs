@@ -19,6 +19,8 @@ pub(crate) struct Progress {
     /// Frames reported up to date or foreign, and frames that failed.
     skipped: Cell<u64>,
     failed: Cell<u64>,
+    /// Whether a frame's colour beyond the largest half float has been reported.
+    half_overflow_told: Cell<bool>,
     start: Instant,
 }
 
@@ -45,6 +47,7 @@ impl Progress {
             done: 0,
             skipped: Cell::new(0),
             failed: Cell::new(0),
+            half_overflow_told: Cell::new(false),
             start: Instant::now(),
         }
     }
@@ -129,19 +132,32 @@ impl Progress {
         }
     }
 
+    /// The first frame of the run whose colour went beyond the largest half float (65504) and
+    /// was clamped to it: a warning, once a run.
+    pub(crate) fn half_overflow(&self, n: u64, path: &str, samples: u64) {
+        if self.half_overflow_told.replace(true) {
+            return;
+        }
+        self.warn(&format!(
+            "warning: frame {n} ({path}): {samples} colour sample{} beyond 65504, the largest half float, {} stored as 65504 instead of infinity; later frames are clamped alike without a word (use --exr-precision float to keep such values)",
+            if samples == 1 { "" } else { "s" },
+            if samples == 1 { "was" } else { "were" }
+        ));
+    }
+
     /// Frames other processes hold, and the first few of their claims: shown even with
     /// `--quiet`, since a worker that waits must say on what.
     pub(crate) fn waiting(&self, frames: &str, count: usize, claims: &[Held]) {
-        let age = |h: &Held| h.heartbeat.map_or(-1.0, |a| a.as_secs_f64());
         if let Mode::Json = self.mode {
             let claims: Vec<String> = claims
                 .iter()
                 .map(|h| {
                     format!(
-                        "{{\"path\": {}, \"owner\": {}, \"heartbeat_seconds\": {:.0}}}",
+                        "{{\"path\": {}, \"owner\": {}, \"heartbeat_seconds\": {}}}",
                         quote(&h.path.display().to_string()),
                         quote(&h.owner),
-                        age(h)
+                        h.heartbeat
+                            .map_or("null".into(), |a| format!("{:.0}", a.as_secs_f64()))
                     )
                 })
                 .collect();
@@ -154,13 +170,14 @@ impl Progress {
         }
         let claims: Vec<String> = claims
             .iter()
-            .map(|h| {
-                format!(
+            .map(|h| match h.heartbeat {
+                Some(age) => format!(
                     "{} ({}, heartbeat {:.0} s ago)",
                     h.path.display(),
                     h.owner,
-                    age(h)
-                )
+                    age.as_secs_f64()
+                ),
+                None => format!("{} (released just now)", h.path.display()),
             })
             .collect();
         let more = count.saturating_sub(claims.len());

@@ -309,16 +309,6 @@ fn ten_million_frames_cost_what_their_selection_costs() {
     }
 }
 
-/// This machine's name as rayreel writes it into temporary names.
-fn host() -> String {
-    let name = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
-    name.trim()
-        .chars()
-        .filter(|c| c.is_ascii_alphanumeric() || *c == '.')
-        .take(64)
-        .collect()
-}
-
 fn alive(pid: i32) -> bool {
     // SAFETY: signal 0 only checks that the process exists.
     unsafe { libc::kill(pid, 0) == 0 }
@@ -533,23 +523,6 @@ fn long_names_render_and_impossible_ones_are_refused_at_load() {
     }
 }
 
-/// This test process's identity as a claim records it: `host=H pid=P start=S boot=B`.
-fn my_claim_owner() -> String {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap();
-    let start = stat[stat.rfind(')').unwrap() + 1..]
-        .split_whitespace()
-        .nth(19)
-        .unwrap()
-        .to_string();
-    let boot = std::fs::read_to_string("/proc/sys/kernel/random/boot_id").unwrap();
-    format!(
-        "host={} pid={} start={start} boot={}",
-        host(),
-        std::process::id(),
-        boot.trim()
-    )
-}
-
 /// Starts a `--claim` render of frames 0-3 into out/ with `extra` flags, stderr piped.
 fn claiming(dir: &Path, extra: &[&str]) -> std::process::Child {
     bin()
@@ -560,32 +533,6 @@ fn claiming(dir: &Path, extra: &[&str]) -> std::process::Child {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap()
-}
-
-/// Waits at most `seconds` for `child` to end; kills it and fails if it is still running.
-fn ends_within(mut child: std::process::Child, seconds: f64, what: &str) -> std::process::Output {
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs_f64(seconds);
-    while child.try_wait().unwrap().is_none() {
-        if std::time::Instant::now() > deadline {
-            child.kill().unwrap();
-            let out = child.wait_with_output().unwrap();
-            panic!("{what}: still running after {seconds} s: {}", stderr(&out));
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    child.wait_with_output().unwrap()
-}
-
-/// `ends_within`, successfully.
-fn finishes_within(child: std::process::Child, seconds: u64, what: &str) -> String {
-    let out = ends_within(child, seconds as f64, what);
-    assert!(out.status.success(), "{what}: {}", stderr(&out));
-    stderr(&out)
-}
-
-fn signal(child: &std::process::Child, signal: i32) {
-    // SAFETY: sends a signal to our own child, which has not been reaped.
-    unsafe { libc::kill(child.id() as i32, signal) };
 }
 
 /// Two facing mirrors around the camera at 4096x4096, 4096 samples, depth 10000: every path

@@ -238,7 +238,7 @@ fn the_film_ends_on_its_last_key() {
     // are named in a warning by check, camera and render.
     let (rows, err) = camera(&dir, &keyed(24, "  duration: 1.5\n", &keys));
     assert_eq!(rows.len(), 36);
-    let warning = "warning: timeline.duration: 1.5 s at 24 fps ends with frame 35 (t = 1.45833 s), so keyframe 2 (t = 2.5 s) is never shown; remove `duration` to end on the last keyframe";
+    let warning = "warning: timeline.duration: 1.5 s at 24 fps ends with frame 35 (t = 1.4583333333333333 s), so keyframe 2 (t = 2.5 s) is never shown; remove `duration` to end on the last keyframe";
     assert!(err.contains(warning), "{err}");
     for command in ["check", "render"] {
         let out = run_in(

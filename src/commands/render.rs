@@ -146,10 +146,15 @@ fn verify(seq: &Sequence, written: &FrameSet, files: &Files) -> Result<(), Error
     for (set, state) in [
         (&check.stale, State::Stale),
         (&check.missing, State::Missing),
-        (&check.foreign, State::Foreign),
     ] {
         bad.extend(set.iter().map(|n| (n, state.clone())));
     }
+    bad.extend(
+        check
+            .why_foreign
+            .into_iter()
+            .map(|(n, why)| (n, State::Foreign(why))),
+    );
     if bad.is_empty() {
         return Ok(());
     }
@@ -170,7 +175,7 @@ fn describe(s: &State) -> String {
         State::Stale => "replaced by a different render".into(),
         State::Missing => "vanished".into(),
         State::Corrupt(why) => format!("now corrupt: {why}"),
-        State::Foreign => "replaced by a file rayreel did not write".into(),
+        State::Foreign(why) => format!("replaced by something rayreel did not write: {why}"),
     }
 }
 
@@ -199,10 +204,24 @@ fn cooperate(
             },
             progress,
         )?;
-        let Outcome::Complete { written: w, held } = outcome else {
-            return Ok(outcome);
+        let held = match outcome {
+            Outcome::Complete { written: w, held } => {
+                written += w;
+                held
+            }
+            // A signal while waiting on other processes' claims stops the pass that follows:
+            // what the earlier passes wrote counts too.
+            Outcome::Interrupted {
+                written: w,
+                streamed,
+            } => {
+                return Ok(Outcome::Interrupted {
+                    written: written + w,
+                    streamed,
+                });
+            }
+            other => return Ok(other),
         };
-        written += w;
         if signals::interrupted() {
             return Ok(Outcome::Interrupted {
                 written,
@@ -298,11 +317,11 @@ fn report_skipped(progress: &Progress, plan: &Plan, files: &Files) {
             progress.frame_skipped(n, &path(n), "up-to-date");
         }
     }
-    for n in plan.foreign.iter() {
-        progress.frame_skipped(n, &path(n), "foreign");
+    for (n, why) in &plan.why_foreign {
+        progress.frame_skipped(*n, &path(*n), "foreign");
         progress.warn(&format!(
-            "{}: not written by rayreel (no fingerprint); leaving it alone (use --force to overwrite)",
-            path(n)
+            "{}: {why}; leaving it alone (use --force to overwrite)",
+            path(*n)
         ));
     }
 }

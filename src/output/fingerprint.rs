@@ -67,12 +67,25 @@ pub(crate) fn of_run(scene: &Scene, settings: &Settings, format: &FileFormat) ->
     h
 }
 
+/// The run's hash extended with what an EXR header records for the whole run beyond its
+/// pixels: `framesPerSecond` (numerator and denominator as stored), after the bytes
+/// `exr rate`. A PNG records no frame rate, and its fingerprint stays as it was.
+pub(crate) fn with_exr_rate(run: &Hasher, (num, den): (i32, u32)) -> Hasher {
+    let mut h = *run;
+    h.write(b"exr rate");
+    h.write(&num.to_le_bytes());
+    den.canon(&mut h);
+    h
+}
+
 /// The fingerprint of one frame: the run's hash extended with the frame's number (its
 /// samples are seeded from it), its camera pose at the frame time, and what its exposure adds:
 /// the lens when open, and the camera at every instant of the shutter's open interval when the
 /// camera moves while it is open (a still camera gives the same image with a shutter or
-/// without, and the same fingerprint).
-pub(crate) fn of_frame(run: &Hasher, view: &FrameView) -> String {
+/// without, and the same fingerprint); for an EXR file (`exr_time`), last, the time its header
+/// records (`rayreel:time`), which a change of fps or first frame moves even where the camera
+/// holds still.
+pub(crate) fn of_frame(run: &Hasher, view: &FrameView, exr_time: bool) -> String {
     let mut h = *run;
     view.frame.canon(&mut h);
     view.pose.canon(&mut h);
@@ -84,6 +97,9 @@ pub(crate) fn of_frame(run: &Hasher, view: &FrameView) -> String {
         }
         // Never rendered: the run stops on it.
         Err(_) => tagged(&mut h, 1, &[]),
+    }
+    if exr_time {
+        view.time.canon(&mut h);
     }
     h.hex()
 }
@@ -469,10 +485,23 @@ mod tests {
         bytes.push(0); // srgb
         bytes.extend([0, 0]); // png, 8 bits
         assert_eq!(run.hex(), Hasher::new().write(&bytes).hex());
+        // An EXR's run adds the rate its header stores, its frames the time they record.
+        let mut rate = bytes.clone();
+        rate.extend(b"exr rate");
+        rate.extend(30000i32.to_le_bytes());
+        rate.extend(1001u32.to_le_bytes());
+        let exr = with_exr_rate(&run, (30000, 1001));
+        assert_eq!(exr.hex(), Hasher::new().write(&rate).hex());
+        let view = FrameView::of_frame(&still(0.0, 0.0), None, 1);
+        assert_ne!(of_frame(&exr, &view, true), of_frame(&exr, &view, false));
         // The frame's number, camera and lens each change it; a shutter on a still camera
         // and the compression do not.
         let at = |x, aperture, n, shutter| {
-            of_frame(&run, &FrameView::of_frame(&still(x, aperture), shutter, n))
+            of_frame(
+                &run,
+                &FrameView::of_frame(&still(x, aperture), shutter, n),
+                false,
+            )
         };
         let open = Some(Shutter {
             angle: 180.0,

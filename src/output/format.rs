@@ -91,6 +91,27 @@ pub struct Expected {
     pub alpha: bool,
 }
 
+impl Expected {
+    /// The most bytes a frame file of this job can take: twice its samples uncompressed (a
+    /// frame's channels at most, with a filter byte per PNG row; no encoder doubles its
+    /// input) and 1 MiB for signatures, headers, chunk and block framing and metadata.
+    pub fn max_file_bytes(&self) -> u64 {
+        let per_pixel = match self.format {
+            FileFormat::Png { .. } => {
+                let (depth, _, channels) = self.format.png_layout(self.alpha);
+                channels * u64::from(depth / 8)
+            }
+            // R, G, B and A in the colour precision, and a 32-bit Z.
+            FileFormat::Exr { precision } => match precision {
+                ExrPrecision::Half => 4 * 2 + 4,
+                ExrPrecision::Float => 4 * 4 + 4,
+            },
+        };
+        let (w, h) = (u64::from(self.width), u64::from(self.height));
+        2 * (w * h * per_pixel + h) + (1 << 20)
+    }
+}
+
 /// What is at a frame path before rendering.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Existing {
@@ -104,8 +125,9 @@ pub enum Existing {
         fingerprint: String,
         why: String,
     },
-    /// A complete image without our fingerprint: someone else's, never overwritten unforced.
-    Foreign,
+    /// Someone else's, never overwritten unforced: a complete image without our fingerprint,
+    /// or something that is not a regular file (why, in words).
+    Foreign(String),
     /// Truncated, damaged or not an image at all.
     Corrupt(String),
 }

@@ -30,35 +30,47 @@ impl Files {
 pub(crate) struct FrameMeta {
     pub(crate) frame: u64,
     pub(crate) time: f64,
-    pub(crate) fps: f64,
+    /// `framesPerSecond`: the exact fraction, or the closest that an EXR header holds.
+    pub(crate) fps: (i32, u32),
     pub(crate) fingerprint: String,
     /// `worldToCamera` and `worldToNDC` (row-major, row vectors) when the frame has a camera.
     pub(crate) matrices: Option<[glam::DMat4; 2]>,
 }
 
 /// What every frame file of a run shares: the hash of the renderer's version, the scene, the
-/// settings and the file format (`fingerprint::of_run`), the frame rate and the image size.
+/// settings and the file format (`fingerprint::of_run`, and for EXR the frame rate its header
+/// records), the frame rate and the image size.
 #[derive(Clone, Copy)]
 pub(crate) struct RunIdentity {
     run: Hasher,
-    fps: f64,
+    fps: (i32, u32),
     size: (u32, u32),
+    /// The file records its frame rate and time in a way the fingerprint covers (EXR).
+    exr: bool,
 }
 
 impl RunIdentity {
     pub(crate) fn new(seq: &Sequence, format: &FileFormat) -> RunIdentity {
         let s = &seq.settings;
+        let t = &seq.timeline;
+        let fps = super::exr::frames_per_second(t.fps, t.clock.fraction);
+        let run = fingerprint::of_run(&seq.scene, s, format);
+        let exr = matches!(format, FileFormat::Exr { .. });
         RunIdentity {
-            run: fingerprint::of_run(&seq.scene, s, format),
-            fps: seq.timeline.fps,
+            run: match exr {
+                true => fingerprint::with_exr_rate(&run, fps),
+                false => run,
+            },
+            fps,
             size: (s.width, s.height),
+            exr,
         }
     }
 
     /// The fingerprint of the frame `view` shows: what its file carries, and what the resume
     /// check compares an existing file with.
     pub(crate) fn fingerprint(&self, view: &FrameView) -> String {
-        fingerprint::of_frame(&self.run, view)
+        fingerprint::of_frame(&self.run, view, self.exr)
     }
 
     /// Everything the file of the frame `view` shows records about it.

@@ -19,12 +19,13 @@ pub(crate) use identity::{Files, FrameMeta, RunIdentity};
 use crate::frame::Frame;
 use std::path::Path;
 
-/// The bytes of `frame`'s file in `format`, recording `meta`.
+/// The bytes of `frame`'s file in `format`, recording `meta`, and how many colour samples
+/// were beyond the largest half float and hold it instead (EXR half only).
 pub(crate) fn encode_file(
     frame: &Frame,
     format: &FileFormat,
     meta: &FrameMeta,
-) -> Result<Vec<u8>, EncodeError> {
+) -> Result<(Vec<u8>, u64), EncodeError> {
     match *format {
         FileFormat::Png {
             sixteen_bit,
@@ -35,21 +36,64 @@ pub(crate) fn encode_file(
                 ("rayreel:frame", meta.frame.to_string()),
                 ("rayreel:time", format!("{}", meta.time)),
             ];
-            png::encode(frame, sixteen_bit, compression, &text)
+            Ok((png::encode(frame, sixteen_bit, compression, &text)?, 0))
         }
         FileFormat::Exr { precision } => exr::encode(frame, precision, meta),
     }
 }
 
-/// What the file at `path` is, against what this job would write there.
+/// What the file at `path` is, against what this job would write there. Only a regular file
+/// is read (anything else at a frame's name, a FIFO, a device, a directory or a link to one,
+/// is someone else's and is left alone), without ever blocking, and only as far as a frame of
+/// this job can reach: a larger file is judged by its header.
 pub(crate) fn inspect(path: &Path, expected: &Expected) -> Existing {
-    let bytes = match std::fs::read(path) {
+    use crate::regular::{self, Links, Refused};
+    let (file, meta) = match regular::open(path, Links::Follow) {
+        Ok(opened) => opened,
+        Err(Refused::Missing) => return Existing::Missing,
+        Err(Refused::NotRegular(what)) => {
+            return Existing::Foreign(format!("{what}, not a regular file"));
+        }
+        Err(Refused::Io(e)) => return Existing::Corrupt(format!("unreadable: {e}")),
+    };
+    let limit = expected.max_file_bytes();
+    let want = match meta.len() > limit {
+        true => HEADER_BYTES,
+        false => limit + 1,
+    };
+    let bytes = match regular::read_at_most(&file, meta.len(), want) {
         Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Existing::Missing,
         Err(e) => return Existing::Corrupt(format!("unreadable: {e}")),
     };
+    let size = meta.len().max(bytes.len() as u64);
+    if size > limit {
+        return oversized(&bytes, size, limit, expected);
+    }
     match expected.format {
         FileFormat::Png { .. } => png::inspect(&bytes, expected),
         FileFormat::Exr { .. } => exr::inspect(&bytes, expected),
+    }
+}
+
+/// How much of a file larger than any frame of the job is read: enough for the header, where
+/// rayreel puts the fingerprint (before a PNG's image data, in an EXR's header).
+const HEADER_BYTES: u64 = 64 << 10;
+
+/// A file larger than any frame of this job, by the start of it: ours (an earlier job's,
+/// larger frame: stale, or this frame's, damaged) when the header holds our fingerprint,
+/// otherwise someone else's.
+fn oversized(head: &[u8], size: u64, limit: u64, expected: &Expected) -> Existing {
+    let fingerprint = match expected.format {
+        FileFormat::Png { .. } => png::header_fingerprint(head),
+        FileFormat::Exr { .. } => exr::header_fingerprint(head),
+    };
+    match fingerprint {
+        Some(fingerprint) => Existing::Damaged {
+            fingerprint,
+            why: format!("{size} bytes, more than a frame of this job can take ({limit})"),
+        },
+        None => Existing::Foreign(format!(
+            "{size} bytes, more than a frame of this job can take, and no rayreel fingerprint in its header"
+        )),
     }
 }

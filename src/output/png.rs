@@ -79,7 +79,7 @@ pub fn inspect(bytes: &[u8], expected: &Expected) -> Existing {
         Err(why) => return Existing::Corrupt(why),
     };
     let Some(fingerprint) = chunks.fingerprint else {
-        return Existing::Foreign;
+        return Existing::Foreign(NO_FINGERPRINT.into());
     };
     match check_header(chunks.header, expected).and_then(|rows| check_data(&chunks.data, rows)) {
         Ok(()) => Existing::Ours(fingerprint),
@@ -95,31 +95,21 @@ struct Chunks<'a> {
     data: Vec<&'a [u8]>,
 }
 
+/// Why a complete image counts as someone else's.
+pub(crate) const NO_FINGERPRINT: &str = "not written by rayreel (no fingerprint)";
+
+const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+
 fn walk(bytes: &[u8]) -> Result<Chunks<'_>, String> {
-    const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
-    let mut rest = bytes.strip_prefix(SIGNATURE).ok_or("not a PNG file")?;
+    let rest = bytes.strip_prefix(SIGNATURE).ok_or("not a PNG file")?;
     let mut found = Chunks {
         header: &[],
         fingerprint: None,
         data: Vec::new(),
     };
     let mut first = true;
-    while rest.len() >= 12 {
-        let len = u32::from_be_bytes(rest[..4].try_into().expect("4 bytes")) as usize;
-        if rest.len() < 12 + len {
-            return Err("truncated".into());
-        }
-        let (kind, data) = (&rest[4..8], &rest[8..8 + len]);
-        let crc = u32::from_be_bytes(rest[8 + len..12 + len].try_into().expect("4 bytes"));
-        let mut h = crc32fast::Hasher::new();
-        h.update(kind);
-        h.update(data);
-        if h.finalize() != crc {
-            return Err(format!(
-                "bad checksum in a {} chunk",
-                String::from_utf8_lossy(kind)
-            ));
-        }
+    for chunk in chunks(rest) {
+        let (kind, data) = chunk?;
         if first && kind != b"IHDR" {
             return Err("no PNG header".into());
         }
@@ -128,19 +118,67 @@ fn walk(bytes: &[u8]) -> Result<Chunks<'_>, String> {
             b"IDAT" => found.data.push(data),
             b"IEND" => return Ok(found),
             b"tEXt" => {
-                if let Some(value) = data
-                    .strip_prefix(fingerprint::KEY.as_bytes())
-                    .and_then(|v| v.strip_prefix(b"\0"))
-                {
-                    found.fingerprint = Some(String::from_utf8_lossy(value).into_owned());
+                if let Some(f) = text_fingerprint(data) {
+                    found.fingerprint = Some(f);
                 }
             }
             _ => {}
         }
         first = false;
-        rest = &rest[12 + len..];
     }
     Err("truncated".into())
+}
+
+/// The fingerprint among the chunks ahead of the image data, read from the start of a file
+/// (rayreel writes it there, so the first kilobytes are enough); `None` when a checksum fails
+/// or the image data comes first.
+pub(crate) fn header_fingerprint(head: &[u8]) -> Option<String> {
+    for chunk in chunks(head.strip_prefix(SIGNATURE)?) {
+        match chunk.ok()? {
+            (b"IDAT" | b"IEND", _) => return None,
+            (b"tEXt", data) => {
+                if let Some(f) = text_fingerprint(data) {
+                    return Some(f);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// The value of a `tEXt` chunk holding our fingerprint.
+fn text_fingerprint(data: &[u8]) -> Option<String> {
+    let value = data
+        .strip_prefix(fingerprint::KEY.as_bytes())?
+        .strip_prefix(b"\0")?;
+    Some(String::from_utf8_lossy(value).into_owned())
+}
+
+/// The chunks after the signature, each (type, data) once its CRC is checked, or why the
+/// walk cannot go on; they end where fewer bytes than a chunk's framing (12) remain.
+fn chunks(bytes: &[u8]) -> impl Iterator<Item = Result<(&[u8], &[u8]), String>> {
+    let mut rest = Some(bytes);
+    std::iter::from_fn(move || {
+        let r = rest.take().filter(|r| r.len() >= 12)?;
+        let len = u32::from_be_bytes(r[..4].try_into().expect("4 bytes")) as usize;
+        if r.len() - 12 < len {
+            return Some(Err("truncated".into()));
+        }
+        let (kind, data) = (&r[4..8], &r[8..8 + len]);
+        let crc = u32::from_be_bytes(r[8 + len..12 + len].try_into().expect("4 bytes"));
+        let mut h = crc32fast::Hasher::new();
+        h.update(kind);
+        h.update(data);
+        if h.finalize() != crc {
+            return Some(Err(format!(
+                "bad checksum in a {} chunk",
+                String::from_utf8_lossy(kind)
+            )));
+        }
+        rest = Some(&r[12 + len..]);
+        Some(Ok((kind, data)))
+    })
 }
 
 /// The header against the job; returns the length of one filtered row and the row count.

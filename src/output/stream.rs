@@ -110,14 +110,40 @@ pub(crate) fn pix_fmt(sixteen_bit: bool, alpha: bool) -> &'static str {
 /// The filter that pads an odd size to the next even one.
 pub(crate) const PAD: &str = "pad=ceil(iw/2)*2:ceil(ih/2)*2";
 
-/// `w` as one word of a POSIX shell: as it is when it holds only characters no shell treats
-/// specially, otherwise in single quotes (a quote inside becomes `'\''`).
+/// `w` as one word of a shell: as it is when it holds only characters no shell treats
+/// specially, otherwise in single quotes (a quote inside becomes `'\''`). A word holding a
+/// control character, or a character that reorders what a terminal shows, is written in
+/// bash's `$'…'` instead, each such character as an escape (`\n`, `\t`, `\x01`, `\u202e`):
+/// printed as it is, the line would be broken or garbled on the way to the terminal (rayreel
+/// shows such characters as escapes), and a pasted line would name another file.
 pub(crate) fn shell_quote(w: &str) -> String {
     let plain = |c: char| c.is_ascii_alphanumeric() || "-_./:=,+%@".contains(c);
-    match !w.is_empty() && w.chars().all(plain) {
-        true => w.to_string(),
-        false => format!("'{}'", w.replace('\'', r"'\''")),
+    if !w.is_empty() && w.chars().all(plain) {
+        return w.to_string();
     }
+    if !w.chars().any(escaped) {
+        return format!("'{}'", w.replace('\'', r"'\''"));
+    }
+    let mut out = String::from("$'");
+    for c in w.chars() {
+        match c {
+            '\\' => out.push_str(r"\\"),
+            '\'' => out.push_str(r"\'"),
+            '\n' => out.push_str(r"\n"),
+            '\t' => out.push_str(r"\t"),
+            '\r' => out.push_str(r"\r"),
+            c if escaped(c) && (c as u32) < 0x80 => out.push_str(&format!("\\x{:02x}", c as u32)),
+            c if escaped(c) => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('\'');
+    out
+}
+
+/// What `shell_quote` writes as an escape: what `console::printable` would not show as it is.
+fn escaped(c: char) -> bool {
+    c.is_control() || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
 }
 
 #[cfg(test)]
@@ -141,6 +167,11 @@ mod tests {
         assert_eq!(
             ffmpeg_command(files, false, (640, 360), "24000/1001", "it's.mp4"),
             "ffmpeg -framerate 24000/1001 -start_number 1001 -i 'my frames/f_%04d.png' -c:v libx264 -pix_fmt yuv420p 'it'\\''s.mp4'"
+        );
+        // Control characters and bidirectional overrides as escapes, in bash's $'…'.
+        assert_eq!(
+            shell_quote("a\nb\tc's\\\u{1}\u{202e}é"),
+            r"$'a\nb\tc\'s\\\x01\u202eé'"
         );
         // RGBA files keep their alpha in ProRes 4444, at any size.
         assert_eq!(

@@ -169,6 +169,10 @@ impl Delivery<'_> {
                 return;
             }
             self.written += 1;
+            if done.clamped > 0 {
+                self.progress
+                    .half_overflow(frame, &path.display().to_string(), done.clamped);
+            }
             self.progress
                 .frame_done(frame, &path.display().to_string(), done.seconds);
         }

@@ -13,6 +13,8 @@ use std::time::Instant;
 pub(super) struct Encoded {
     pub(super) seconds: f64,
     pub(super) file: Option<Vec<u8>>,
+    /// Colour samples of the file beyond the largest half float, held at it.
+    pub(super) clamped: u64,
     pub(super) stream: Option<Vec<u8>>,
 }
 
@@ -37,16 +39,15 @@ pub(super) fn produce(
     let Some(frame) = tracer::render_or_stop(world, exposure, &seq.settings, n, cancel) else {
         return Ok(None);
     };
-    let file = match files.filter(|_| task.write_file) {
+    let (file, clamped) = match files.filter(|_| task.write_file) {
         Some((files, identity)) => {
             let meta = identity.meta(&view);
             let path = files.frame_path(n);
-            Some(
-                output::encode_file(&frame, &files.format, &meta)
-                    .map_err(|source| RunError::Encode { path, source })?,
-            )
+            let (bytes, clamped) = output::encode_file(&frame, &files.format, &meta)
+                .map_err(|source| RunError::Encode { path, source })?;
+            (Some(bytes), clamped)
         }
-        None => None,
+        None => (None, 0),
     };
     let stream = match stream {
         Some((format, sixteen)) => Some(
@@ -59,6 +60,7 @@ pub(super) fn produce(
     Ok(Some(Encoded {
         seconds: start.elapsed().as_secs_f64(),
         file,
+        clamped,
         stream,
     }))
 }

@@ -23,7 +23,7 @@ use scene::*;
 use settings::*;
 
 pub use guard::nesting_depth;
-pub(crate) use messages::num;
+pub(crate) use messages::{approx, num};
 pub use settings::{DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD};
 pub(crate) use settings::{MAX_SAMPLES, exposure, output_pattern, preset};
 pub(crate) use timeline::MAX_FIRST_FRAME;

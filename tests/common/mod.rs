@@ -278,3 +278,60 @@ pub fn uv_sphere(segments: usize, rings: usize, normals: bool, inward: bool) -> 
     }
     s
 }
+
+/// This machine's name as rayreel writes it into temporary names.
+pub fn host() -> String {
+    let name = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
+    name.trim()
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || *c == '.')
+        .take(64)
+        .collect()
+}
+
+/// This test process's identity as a claim records it: `host=H pid=P start=S boot=B`.
+pub fn my_claim_owner() -> String {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap();
+    let start = stat[stat.rfind(')').unwrap() + 1..]
+        .split_whitespace()
+        .nth(19)
+        .unwrap()
+        .to_string();
+    let boot = std::fs::read_to_string("/proc/sys/kernel/random/boot_id").unwrap();
+    format!(
+        "host={} pid={} start={start} boot={}",
+        host(),
+        std::process::id(),
+        boot.trim()
+    )
+}
+
+/// Waits at most `seconds` for `child` to end; kills it and fails if it is still running.
+pub fn ends_within(
+    mut child: std::process::Child,
+    seconds: f64,
+    what: &str,
+) -> std::process::Output {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs_f64(seconds);
+    while child.try_wait().unwrap().is_none() {
+        if std::time::Instant::now() > deadline {
+            child.kill().unwrap();
+            let out = child.wait_with_output().unwrap();
+            panic!("{what}: still running after {seconds} s: {}", stderr(&out));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// `ends_within`, successfully.
+pub fn finishes_within(child: std::process::Child, seconds: u64, what: &str) -> String {
+    let out = ends_within(child, seconds as f64, what);
+    assert!(out.status.success(), "{what}: {}", stderr(&out));
+    stderr(&out)
+}
+
+pub fn signal(child: &std::process::Child, signal: i32) {
+    // SAFETY: sends a signal to our own child, which has not been reaped.
+    unsafe { libc::kill(child.id() as i32, signal) };
+}

@@ -68,27 +68,23 @@ pub fn load(file: &Path) -> Result<Mesh, MeshError> {
 }
 
 fn read(file: &Path) -> Result<Vec<u8>, MeshError> {
-    use std::io::Read;
-    use std::os::unix::fs::OpenOptionsExt;
+    use crate::regular::{self, Links, Refused};
     let fail = |message: String| MeshError {
         file: file.to_owned(),
         where_: None,
         message,
     };
-    // Non-blocking open: a FIFO at the name must not hang the load before it can be refused.
-    let f = std::fs::OpenOptions::new()
-        .read(true)
-        .custom_flags(libc::O_NONBLOCK)
-        .open(file)
-        .map_err(|e| fail(format!("cannot read: {e}")))?;
-    let meta = f
-        .metadata()
-        .map_err(|e| fail(format!("cannot read: {e}")))?;
-    if !meta.is_file() {
-        return Err(fail(
-            "is not a regular file (a FIFO, device or directory cannot be a mesh)".into(),
-        ));
-    }
+    // A FIFO at the name must not hang the load before it can be refused.
+    let (f, meta) = regular::open(file, Links::Follow).map_err(|e| match e {
+        Refused::NotRegular(_) => {
+            fail("is not a regular file (a FIFO, device or directory cannot be a mesh)".into())
+        }
+        Refused::Missing => fail(format!(
+            "cannot read: {}",
+            std::io::Error::from_raw_os_error(libc::ENOENT)
+        )),
+        Refused::Io(e) => fail(format!("cannot read: {e}")),
+    })?;
     if meta.len() > MAX_MESH_BYTES {
         return Err(fail(format!(
             "the file is {} bytes; meshes are limited to {} GiB",
@@ -96,11 +92,8 @@ fn read(file: &Path) -> Result<Vec<u8>, MeshError> {
             MAX_MESH_BYTES >> 30
         )));
     }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    f.take(MAX_MESH_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| fail(format!("cannot read: {e}")))?;
-    Ok(bytes)
+    regular::read_at_most(&f, meta.len(), MAX_MESH_BYTES + 1)
+        .map_err(|e| fail(format!("cannot read: {e}")))
 }
 
 /// Drops degenerate triangles, fills in normals, and hashes the content.

@@ -1,0 +1,424 @@
+//! A second adversarial pass, through the real binary: what stands at a frame's or a claim's
+//! name cannot make a run block or read without end, a failing stderr loses lines and not
+//! frames, a signal while waiting on a claim stops the run with the true count, and what
+//! files and messages say is exactly true (EXR frame rates, half floats, numbers, the ffmpeg
+//! line).
+
+mod common;
+use common::*;
+use std::os::unix::fs::FileTypeExt;
+use std::path::Path;
+
+fn small() -> String {
+    sequence(32, 18, &orbit(24, 1.0))
+}
+
+fn mkfifo(path: &Path) {
+    let c = std::ffi::CString::new(path.to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "{path:?}");
+}
+
+/// Starts rayreel in `dir` with `args`, stdout and stderr piped.
+fn start(dir: &Path, args: &[&str]) -> std::process::Child {
+    bin()
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+const FRAMES: [&str; 5] = ["seq.yaml", "-o", "out/f_####.png", "--frames", "0-3"];
+
+#[test]
+fn fifos_devices_and_huge_files_at_frame_names_neither_block_nor_get_read() {
+    let tmp = scratch("frame-fifo");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let out = tmp.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    // Frame 0: a FIFO nobody writes; frame 1: a link to /dev/zero (a read that never ends);
+    // frame 3: a sparse 64 GiB file without a fingerprint.
+    mkfifo(&out.join("f_0000.png"));
+    std::os::unix::fs::symlink("/dev/zero", out.join("f_0001.png")).unwrap();
+    std::fs::File::create(out.join("f_0003.png"))
+        .unwrap()
+        .set_len(64 << 30)
+        .unwrap();
+    let status = ends_within(
+        start(&tmp, &[&["status"], &FRAMES[..]].concat()),
+        10.0,
+        "status",
+    );
+    let listing = String::from_utf8_lossy(&status.stdout);
+    assert_eq!(
+        status.status.code(),
+        Some(1),
+        "{listing}{}",
+        stderr(&status)
+    );
+    assert!(listing.contains("foreign     0-1,3"), "{listing}");
+    assert!(listing.contains("missing     2"), "{listing}");
+
+    let render = ends_within(
+        start(&tmp, &[&["render"], &FRAMES[..]].concat()),
+        30.0,
+        "render",
+    );
+    let log = stderr(&render);
+    assert_eq!(render.status.code(), Some(1), "{log}");
+    for said in [
+        "out/f_0000.png: a FIFO, not a regular file; leaving it alone (use --force to overwrite)",
+        "out/f_0001.png: a character device, not a regular file; leaving it alone",
+        "out/f_0003.png: 68719476736 bytes, more than a frame of this job can take, and no rayreel fingerprint in its header; leaving it alone",
+        "frames 0-1,3 were not written: files rayreel did not write are in the way",
+    ] {
+        assert!(log.contains(said), "{said}: {log}");
+    }
+    // Nothing of the user's was replaced; frame 2 was written.
+    let kind = |n: &str| std::fs::symlink_metadata(out.join(n)).unwrap().file_type();
+    assert!(kind("f_0000.png").is_fifo());
+    assert!(kind("f_0001.png").is_symlink());
+    assert_eq!(
+        std::fs::metadata(out.join("f_0003.png")).unwrap().len(),
+        64 << 30
+    );
+    assert!(kind("f_0002.png").is_file());
+
+    // A frame of ours grown past what a frame of the job can be is judged by its header: its
+    // own fingerprint, so corrupt (re-rendered), not foreign.
+    let grown = std::fs::OpenOptions::new()
+        .append(true)
+        .open(out.join("f_0002.png"))
+        .unwrap();
+    grown.set_len(64 << 30).unwrap();
+    let status = ends_within(
+        start(&tmp, &[&["status"], &FRAMES[..]].concat()),
+        10.0,
+        "status",
+    );
+    let listing = String::from_utf8_lossy(&status.stdout);
+    assert!(listing.contains("corrupt     2"), "{listing}");
+}
+
+#[test]
+fn anything_but_a_file_at_a_claims_name_stops_the_run_naming_it() {
+    let tmp = scratch("claim-fifo");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let out = tmp.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let claim = out.join(".f_0002.png.rayreel-claim");
+    for (what, plant) in [
+        ("a FIFO", &(|p: &Path| mkfifo(p)) as &dyn Fn(&Path)),
+        ("a symbolic link", &|p: &Path| {
+            std::os::unix::fs::symlink("/dev/zero", p).unwrap()
+        }),
+    ] {
+        plant(&claim);
+        let args = [&["render"], &FRAMES[..], &["--claim", "--threads", "1"]].concat();
+        let run = ends_within(start(&tmp, &args), 30.0, what);
+        let log = stderr(&run);
+        assert_eq!(run.status.code(), Some(1), "{what}: {log}");
+        assert!(
+            log.contains(&format!(
+                "rayreel: out/.f_0002.png.rayreel-claim: cannot create claim: {what} stands at the claim's name, where rayreel only ever writes regular files; remove it"
+            )),
+            "{what}: {log}"
+        );
+        // Left where it was.
+        let meta = std::fs::symlink_metadata(&claim).unwrap();
+        assert!(meta.file_type().is_fifo() || meta.file_type().is_symlink());
+        std::fs::remove_file(&claim).unwrap();
+    }
+}
+
+#[test]
+fn a_failing_stderr_loses_lines_not_frames() {
+    let tmp = with_clean_render("full-stderr", &small());
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap()
+    };
+    for (dir, extra) in [("lines", &[][..]), ("json", &["--progress", "json"][..])] {
+        let pattern = format!("{dir}/f_####.png");
+        let run = bin()
+            .args(["render", "seq.yaml", "-o", &pattern])
+            .args(extra)
+            .current_dir(&tmp)
+            .stderr(full())
+            .output()
+            .unwrap();
+        // Once: "failed printing to stderr", exit 101 and no frame.
+        assert_eq!(run.status.code(), Some(0), "{dir}");
+        assert_same_files(&tmp.join(dir), &tmp.join("clean"));
+    }
+    // An error still ends with its exit code.
+    let run = bin()
+        .args(["render", "missing.yaml"])
+        .current_dir(&tmp)
+        .stderr(full())
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    let run = bin()
+        .args(["render", "--no-such-flag"])
+        .current_dir(&tmp)
+        .stderr(full())
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+}
+
+#[test]
+fn one_sigterm_while_waiting_on_a_claim_stops_with_the_frames_written() {
+    let tmp = scratch("claim-sigterm");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let out = tmp.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    // Held by this test process: alive, so the run waits on it.
+    std::fs::write(out.join(".f_0002.png.rayreel-claim"), my_claim_owner()).unwrap();
+    let args = [&["render"], &FRAMES[..], &["--claim", "--threads", "1"]].concat();
+    let mut child = start(&tmp, &args);
+    let err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufRead::lines(err) {
+            let _ = tx.send(line.unwrap());
+        }
+    });
+    let mut log = String::new();
+    loop {
+        match rx.recv_timeout(std::time::Duration::from_secs(30)) {
+            Ok(line) => {
+                log += &line;
+                log.push('\n');
+                if line.contains("waiting for 1 frame (2)") {
+                    break;
+                }
+            }
+            Err(e) => {
+                child.kill().unwrap();
+                panic!("the worker did not wait: {e}: {log}");
+            }
+        }
+    }
+    let sent = std::time::Instant::now();
+    signal(&child, libc::SIGTERM);
+    let run = ends_within(child, 10.0, "after SIGTERM");
+    assert!(sent.elapsed().as_secs_f64() < 3.0);
+    while let Ok(line) = rx.recv_timeout(std::time::Duration::from_secs(1)) {
+        log += &line;
+        log.push('\n');
+    }
+    assert_eq!(run.status.code(), Some(143), "{log}");
+    assert!(
+        log.contains("rayreel: stopping on SIGTERM: no frame is in flight"),
+        "{log}"
+    );
+    // The closing line agrees with what was written (it once said 0).
+    assert!(log.contains("rendered 3 frames in"), "{log}");
+    assert!(
+        log.contains("rayreel: interrupted: 3 frames written in this run"),
+        "{log}"
+    );
+    let written: Vec<String> = files(&out);
+    assert_eq!(
+        written,
+        [
+            ".f_0002.png.rayreel-claim",
+            "f_0000.png",
+            "f_0001.png",
+            "f_0003.png"
+        ],
+        "{log}"
+    );
+}
+
+/// A still camera, so that a change of fps changes no pixel, at `fps` (YAML).
+fn still_at(fps: &str) -> String {
+    format!(
+        "render: {{ width: 16, height: 9 }}\n{SCENE}timeline:\n  fps: {fps}\n  duration: 10\n  keyframes:\n    - {{ time: 0, position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }}\n"
+    )
+}
+
+/// The header attribute `name` of type `kind` in an EXR file: its value bytes.
+fn exr_attribute<'a>(bytes: &'a [u8], name: &str, kind: &str) -> &'a [u8] {
+    let key = format!("{name}\0{kind}\0");
+    let at = bytes
+        .windows(key.len())
+        .position(|w| w == key.as_bytes())
+        .unwrap_or_else(|| panic!("no {name}"))
+        + key.len();
+    let size = i32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+    &bytes[at + 4..at + 4 + size]
+}
+
+fn frames_per_second(path: &Path) -> (i32, u32) {
+    let bytes = std::fs::read(path).unwrap();
+    let v = exr_attribute(&bytes, "framesPerSecond", "rational");
+    (
+        i32::from_le_bytes(v[..4].try_into().unwrap()),
+        u32::from_le_bytes(v[4..8].try_into().unwrap()),
+    )
+}
+
+#[test]
+fn exr_frame_rates_are_exact_and_a_new_rate_makes_frames_stale() {
+    let tmp = scratch("exr-fps");
+    let args = ["seq.yaml", "-o", "out/f_####.exr", "--frames", "1-2"];
+    let frame = tmp.join("out/f_0001.exr");
+    // As written; the same rate written otherwise; a decimal as written, in lowest terms.
+    for (fps, stored, before) in [
+        ("30000/1001", (30000, 1001), None),
+        ("60000/2002", (30000, 1001), Some("up to date  1-2")),
+        // The pixels are the same at any rate (the camera holds still), but the header's
+        // `framesPerSecond` and `rayreel:time` are not: the frames are stale.
+        ("23.976", (2997, 125), Some("stale       1-2")),
+        ("0.5", (1, 2), Some("stale       1-2")),
+    ] {
+        std::fs::write(tmp.join("seq.yaml"), still_at(fps)).unwrap();
+        if let Some(expect) = before {
+            let status = run_in(&tmp, &[&["status"], &args[..]].concat());
+            let listing = String::from_utf8_lossy(&status.stdout);
+            assert!(listing.contains(expect), "{fps}: {listing}");
+        }
+        let run = run_in(&tmp, &[&["render"], &args[..]].concat());
+        assert!(run.status.success(), "{}", stderr(&run));
+        assert_eq!(frames_per_second(&frame), stored, "{fps}");
+        let bytes = std::fs::read(&frame).unwrap();
+        let time = exr_attribute(&bytes, "rayreel:time", "double");
+        let time = f64::from_le_bytes(time.try_into().unwrap());
+        let exact = f64::from(stored.1) / f64::from(stored.0);
+        assert!((time - exact).abs() <= 1e-15 * exact, "{fps}: {time}");
+    }
+}
+
+#[test]
+fn half_floats_hold_65504_where_the_light_is_brighter_with_one_warning() {
+    let tmp = scratch("half-inf");
+    let yaml = small().replace(
+        "diffuse: [1, 1, 1], specular: [1, 1, 1] }",
+        "diffuse: [1000000, 1000000, 1000000], specular: [1, 1, 1] }",
+    );
+    assert!(yaml.contains("1000000"));
+    std::fs::write(tmp.join("seq.yaml"), yaml).unwrap();
+    let run = run_in(
+        &tmp,
+        &[
+            "render",
+            "seq.yaml",
+            "-o",
+            "out/f_####.exr",
+            "--frames",
+            "0-1",
+        ],
+    );
+    let log = stderr(&run);
+    assert!(run.status.success(), "{log}");
+    assert_eq!(log.matches("beyond 65504").count(), 1, "{log}");
+    assert!(log.contains("warning: frame 0 (out/f_0000.exr): "), "{log}");
+    assert!(log.contains("stored as 65504 instead of infinity"), "{log}");
+    for n in 0..2 {
+        let image =
+            exr::prelude::read_all_flat_layers_from_file(tmp.join(format!("out/f_000{n}.exr")))
+                .unwrap();
+        let mut top = 0f32;
+        for channel in &image.layer_data[0].channel_data.list {
+            for v in channel.sample_data.values_as_f32() {
+                assert!(v.is_finite(), "frame {n}: {v}");
+                top = top.max(v);
+            }
+        }
+        assert_eq!(top, 65504.0, "frame {n}");
+    }
+    // 32-bit floats hold the values themselves, without a warning.
+    let run = run_in(
+        &tmp,
+        &[
+            "render",
+            "seq.yaml",
+            "-o",
+            "float/f_####.exr",
+            "--frames",
+            "0",
+            "--exr-precision",
+            "float",
+        ],
+    );
+    assert!(
+        run.status.success() && !stderr(&run).contains("65504"),
+        "{}",
+        stderr(&run)
+    );
+}
+
+#[test]
+fn numbers_in_messages_are_exact_and_short() {
+    let tmp = scratch("exact-numbers");
+    for (field, value, said) in [
+        (
+            "shutter",
+            "360.0001",
+            "must be an angle in [0, 360] degrees (0: no motion blur, 180: film) (got 360.0001)",
+        ),
+        ("shutter", "-1e-300", "(got -1e-300)"),
+        ("shutter", "360.00000000000006", "(got 360.00000000000006)"),
+        ("shutter", "1e300", "(got 1e300)"),
+        ("exposure", "-1000000000000000000000.5", "(got -1e21)"),
+        (
+            "exposure",
+            "64.00000000000001",
+            "must be within ±64 stops (got 64.00000000000001)",
+        ),
+    ] {
+        let yaml = small().replace("render: {", &format!("render: {{ {field}: {value},"));
+        std::fs::write(tmp.join("seq.yaml"), yaml).unwrap();
+        let out = run_in(&tmp, &["check", "seq.yaml"]);
+        let log = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{value}: {log}");
+        assert!(log.contains(said), "{value}: {log}");
+        assert!(log.len() < 400, "{value}: {log}");
+    }
+}
+
+#[test]
+fn the_ffmpeg_line_names_files_with_newlines_and_tabs_exactly() {
+    let tmp = scratch("ffmpeg-quoting");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let dir = "it's\tmy\nframes";
+    let pattern = format!("{dir}/f_####.png");
+    let out = run_in(
+        &tmp,
+        &[
+            "render",
+            "seq.yaml",
+            "-o",
+            &pattern,
+            "--frames",
+            "0",
+            "--print-ffmpeg",
+            "-q",
+        ],
+    );
+    let log = stderr(&out);
+    assert!(out.status.success(), "{log}");
+    assert!(tmp.join(dir).join("f_0000.png").is_file());
+    let line = log
+        .lines()
+        .find(|l| l.starts_with("ffmpeg "))
+        .unwrap_or_else(|| panic!("{log}"));
+    // Pasted into bash, with ffmpeg standing in for a function that prints its arguments.
+    let script = format!("ffmpeg() {{ printf '%s\\0' \"$@\"; }}\n{line}\n");
+    let run = sh(&tmp, &script);
+    assert!(run.status.success(), "{line}: {}", stderr(&run));
+    let words: Vec<String> = String::from_utf8(run.stdout)
+        .unwrap()
+        .split('\0')
+        .map(str::to_string)
+        .collect();
+    let input = words.iter().position(|w| w == "-i").expect("-i") + 1;
+    assert_eq!(words[input], format!("{dir}/f_%04d.png"), "{line}");
+}
