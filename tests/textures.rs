@@ -371,6 +371,9 @@ fn bad_textures_are_refused_with_file_line_and_field() {
         w.write_image_data(&vec![0; 20000]).unwrap();
     }
     std::fs::write(tmp.join("wide.png"), huge).unwrap();
+    // A FIFO at a texture's name is refused without blocking the load.
+    let fifo = std::ffi::CString::new(tmp.join("pipe.png").to_str().unwrap()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(fifo.as_ptr(), 0o644) }, 0);
     let plane = |map: &str| {
         format!(
             "camera: {{ position: [0, 1, 3], look_at: [0, 0, 0] }}\nobjects:\n  - plane: {{ point: [0, 0, 0], normal: [0, 1, 0], material: {{ diffuse: {map} }} }}\n"
@@ -380,6 +383,7 @@ fn bad_textures_are_refused_with_file_line_and_field() {
         (plane("{ image: missing.png }"), "objects[0].plane.material.diffuse.image", "cannot read"),
         (plane("{ image: junk.png }"), "objects[0].plane.material.diffuse.image", "unreadable PNG"),
         (plane("{ image: wide.png }"), "objects[0].plane.material.diffuse.image", "16384 pixels a side"),
+        (plane("{ image: pipe.png }"), "objects[0].plane.material.diffuse.image", "a FIFO"),
         (plane("{ image: t.bmp }"), "objects[0].plane.material.diffuse.image", ".png or .exr"),
         (plane("{ image: ../t.png }"), "objects[0].plane.material.diffuse.image", "relative path below"),
         (plane("{ checker: { size: 0, colors: [[1, 1, 1], [0, 0, 0]] } }"), "objects[0].plane.material.diffuse.checker.size", "positive"),

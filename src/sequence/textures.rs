@@ -160,34 +160,23 @@ fn load(path: &Path, linear: bool) -> Result<Image, String> {
 /// The file's bytes: a regular file only (a FIFO must not hang the load), at most
 /// `MAX_TEXTURE_BYTES`.
 fn read_regular(path: &Path) -> Result<Vec<u8>, String> {
-    use std::io::Read;
-    use std::os::unix::fs::OpenOptionsExt;
-    let f = std::fs::OpenOptions::new()
-        .read(true)
-        .custom_flags(libc::O_NONBLOCK)
-        .open(path)
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let meta = f
-        .metadata()
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    if !meta.is_file() {
-        return Err(format!(
-            "{} is not a regular file (a FIFO, device or directory cannot be a texture)",
-            path.display()
-        ));
-    }
+    use crate::regular::{self, Links, Refused};
+    let shown = path.display();
+    let (f, meta) = regular::open(path, Links::Follow).map_err(|e| match e {
+        Refused::NotRegular(what) => {
+            format!("{shown} is {what}, not a regular file; a texture must be an image file")
+        }
+        Refused::Missing => format!("cannot read {shown}: no such file"),
+        Refused::Io(e) => format!("cannot read {shown}: {e}"),
+    })?;
     if meta.len() > MAX_TEXTURE_BYTES {
         return Err(format!(
-            "{} is {} bytes; texture files are limited to 1 GiB",
-            path.display(),
+            "{shown} is {} bytes; texture files are limited to 1 GiB",
             meta.len()
         ));
     }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    f.take(MAX_TEXTURE_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    Ok(bytes)
+    regular::read_at_most(&f, meta.len(), MAX_TEXTURE_BYTES + 1)
+        .map_err(|e| format!("cannot read {shown}: {e}"))
 }
 
 fn check_size(width: u64, height: u64) -> Result<(u32, u32), String> {
