@@ -458,16 +458,12 @@ timeline:
         "texture",
         &["--size", "97x55", "--samples", "2", "--frames", "3"],
     );
-    let blur = [
-        "--size",
-        "81x45",
-        "--samples",
-        "3",
-        "--frames",
-        "5",
-        "--shutter",
-        "180",
-    ];
+    let blurred = seq.replace(
+        "render: { max_depth: 5 }",
+        "render: { max_depth: 5, shutter: 180 }",
+    );
+    std::fs::write(tmp.join("seq.yaml"), blurred).unwrap();
+    let blur = ["--size", "81x45", "--samples", "3", "--frames", "5"];
     every_kernel_equals_scalar(&tmp, "texture-blur", &blur);
 }
 
