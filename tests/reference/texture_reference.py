@@ -504,6 +504,15 @@ def make_textures():
         im = Image.fromarray(rng.randint(0, 5, (6, 6)).astype(np.uint8), mode='P')
         im.putpalette([250, 20, 20, 20, 200, 40, 30, 40, 230, 240, 230, 30, 10, 10, 10] + [0] * 3 * 251)
         im.save(p)
+    p = os.path.join(TEXDIR, 'rgba8.png')  # 37 × 23 8-bit RGBA (alpha ignored): six odd-sized mip levels
+    if not os.path.exists(p):
+        Image.fromarray(rng.randint(0, 256, (23, 37, 4)).astype(np.uint8), mode='RGBA').save(p)
+    p = os.path.join(TEXDIR, 'quad_vn.obj')  # vertex normals leaning to +x: a phong S that can face away from the ray
+    if not os.path.exists(p):
+        open(p, 'w').write('# a quad in y = 0 with texture coordinates and normals leaning to +x\n'
+                           'v -1 0 1\nv 1 0 1\nv 1 0 -1\nv -1 0 -1\n'
+                           'vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 1 0.25 0\nvn 1 0.3 0.1\n'
+                           'f 1/1/1 2/2/2 3/3/1 4/4/2\n')
     p = os.path.join(TEXDIR, 'quad_uv.obj')
     if not os.path.exists(p):
         open(p, 'w').write('# a quad in y = 0 with texture coordinates (two repeats along u), CCW from +y\n'
@@ -527,6 +536,9 @@ MATERIALS = {
     'rgb16': {'diffuse': {'image': 'rgb16.png', 'scale': [1.5, 1]}, 'ambient': [0.05, 0.05, 0.05], 'specular': [0.2, 0.2, 0.2], 'shininess': 20},
     'pal': {'diffuse': {'image': 'pal.png', 'scale': [1, 2]}, 'ambient': {'checker': {'size': 0.25, 'colors': [[0.2, 0.2, 0.2], [0, 0, 0]]}},
             'specular': [0.3, 0.3, 0.3], 'shininess': 50},
+    'rgba8': {'diffuse': {'image': 'rgba8.png', 'scale': [3, 2]}, 'ambient': {'image': 'rgba8.png', 'scale': [3, 2]},
+              'specular': [0.4, 0.4, 0.4], 'shininess': 80},
+    'rgba8_fine': {'diffuse': {'image': 'rgba8.png', 'scale': [12, -7]}, 'ambient': [0.1, 0.1, 0.1], 'specular': [0.2, 0.2, 0.2], 'shininess': 20},
     'mirror': {'ambient': [0.02, 0.02, 0.02], 'diffuse': [0.1, 0.1, 0.1], 'specular': [1, 1, 1], 'shininess': 400, 'reflection': 0.8},
     'glass': {'ambient': [0, 0, 0], 'diffuse': [0.03, 0.03, 0.03], 'specular': [1, 1, 1], 'shininess': 300, 'reflection': 0.1,
               'transmission': 0.85, 'ior': 1.5},
@@ -565,6 +577,8 @@ SCENES = {
         {'sphere': {'center': [-1.3, 0, -1], 'radius': 1, 'material': 'rgb8'}},
         {'sphere': {'center': [1.2, -0.2, -1.5], 'radius': 0.9, 'material': 'grey16'}},
         {'sphere': {'center': [0.1, 1.1, -3.5], 'radius': 1.2, 'material': 'pal'}},
+        {'sphere': {'center': [2.6, 1.2, -4], 'radius': 0.9, 'material': 'rgba8_fine'}},
+        {'sphere': {'center': [-2.8, 1.3, -5], 'radius': 1.0, 'material': 'rgba8'}},
     ], {'position': [0, 0.8, 3.5], 'look_at': [0, 0, -1.5], 'fov': 60}),
     # OBJ quads with vt: an image (phong, flat, gouraud) and a checker on a mesh
     'mesh_quads': scene([
@@ -573,6 +587,8 @@ SCENES = {
         {'mesh': {'file': 'quad_uv.obj', 'material': 'grey16', 'shading': 'phong', 'translate': [1.3, -0.9, -1.5], 'scale': [1.2, 1, 0.8], 'rotate': [0, -30, 0]}},
         {'mesh': {'file': 'quad_uv.obj', 'material': 'pal', 'shading': 'gouraud', 'translate': [0, 0.6, -3], 'rotate': [80, 0, 10]}},
         {'mesh': {'file': 'quad_uv.obj', 'material': 'tiles_amb', 'shading': 'flat', 'translate': [2.3, 0.8, -2.5], 'scale': 0.7, 'rotate': [90, -40, 0]}},
+        {'mesh': {'file': 'quad_uv.obj', 'material': 'rgba8_fine', 'shading': 'constant', 'translate': [-2.6, 0.9, -3.5], 'scale': [0.8, 1, 1.3], 'rotate': [75, 35, 0]}},
+        {'mesh': {'file': 'quad_vn.obj', 'material': 'rgba8', 'shading': 'phong', 'translate': [-0.2, -0.7, 0.6], 'scale': 0.8, 'rotate': [0, 0, -25]}},
     ], {'position': [0, 1.2, 3.5], 'look_at': [0, -0.3, -1.5], 'fov': 70}),
     # a mirror sphere reflecting a checker floor: the cone's curvature term s + 2·W/R
     'mirror_checker': scene([
