@@ -6,7 +6,8 @@
 # snapping, the checker's box filter, PNG decoding (8 and 16 bits, grey, RGB, palette), the
 # binary32 mip pyramid, texture coordinates of planes (default u axis and `u_axis`), spheres and
 # OBJ meshes (`vt`), the trilinear lookup and the replacement of diffuse and ambient.
-# Same limits as mesh_reference.py: one sample a pixel (the centre), encoding linear, f64.
+# Same limits as mesh_reference.py (encoding linear, f64, no adaptive sampling, no alpha), except
+# that n² stratified samples a pixel are traced (tracer.md "Sample offsets", frame 0).
 #
 # Usage: python3 texture_reference.py [SCENE ...]     (needs numpy and Pillow; OpenEXR, mpmath optional)
 #   writes texture/SCENE.yaml (and the texture PNGs when missing) and texture/ref_SCENE.png; with
@@ -232,8 +233,40 @@ class TexScene(mr.Scene):
             nz = [i for i in range(3) if N[i] != 0]
             p['snap'] = [(nz[0], p['p'][nz[0]])] if len(nz) == 1 else []
         self.textured_scene = any(o['m']['maps'] for o in self.spheres + self.planes + self.meshes)
-        # texture.md "Eye rays": ((2 · tan_half_fov) / width) / sqrt(samples), samples = 1 here
-        self.eye_spread = ((2.0 * self.s) / float(self.W)) / math.sqrt(1.0)
+        # texture.md "Eye rays": ((2 · tan_half_fov) / width) / sqrt(samples)
+        self.samples = int(d['render'].get('samples', 1))
+        self.eye_spread = ((2.0 * self.s) / float(self.W)) / math.sqrt(float(self.samples))
+
+    def render(self):
+        """tracer.md: one sample at the centre, or n² stratified samples (frame 0, `sampler`
+        stratified), summed in sample order and divided by their count."""
+        n = math.isqrt(self.samples)
+        assert n * n == self.samples, 'the reference does n² samples only'
+        M = (1 << 64) - 1
+        def mix(z):
+            z = (z + 0x9e3779b97f4a7c15) & M
+            z = ((z ^ (z >> 30)) * 0xbf58476d1ce4e5b9) & M
+            z = ((z ^ (z >> 27)) * 0x94d049bb133111eb) & M
+            return z ^ (z >> 31)
+        unit = lambda b: float(b >> 11) * 2.0 ** -53
+        W, H = self.W, self.H
+        img = np.zeros((H, W, 3))
+        for i in range(H):
+            for j in range(W):
+                seed = mix(mix(0x9e3779b97f4a7c15 ^ 0) ^ (i * W + j))
+                acc = (0.0, 0.0, 0.0)
+                for k in range(self.samples):
+                    if self.samples == 1:
+                        u = v = 0.5
+                    else:
+                        h = mix(seed ^ k)
+                        u = ((k % n) + unit(h)) / n; v = ((k // n) + unit(mix(h))) / n
+                    x = -1.0 + (2.0 * (j + u)) / W
+                    y = ((1.0 - (2.0 * (i + v)) / H) * H) / W
+                    dd = normalize(add(add(self.fwd, mr.smul(x * self.s, self.right)), mr.smul(y * self.s, self.up_c)))
+                    acc = add(acc, self.trace_tree(self.pos, dd) if self.trees else self.trace(self.pos, dd))
+                img[i, j] = acc if self.samples == 1 else sdiv(acc, float(self.samples))
+        return img
 
     @staticmethod
     def material(m):
@@ -545,8 +578,8 @@ MATERIALS = {
     'clay': {'ambient': [0.1, 0.08, 0.06], 'diffuse': [0.8, 0.6, 0.5], 'specular': [0.5, 0.5, 0.5], 'shininess': 40},
 }
 
-def scene(objects, camera, w=64, h=36, max_depth=3, lights=LIGHTS):
-    return {'render': {'width': w, 'height': h, 'samples': 1, 'encoding': 'linear', 'max_depth': max_depth,
+def scene(objects, camera, w=64, h=36, max_depth=3, lights=LIGHTS, samples=1):
+    return {'render': {'width': w, 'height': h, 'samples': samples, 'encoding': 'linear', 'max_depth': max_depth,
                        'background': [0.4, 0.55, 0.8]},
             'camera': camera, 'materials': MATERIALS, 'objects': objects, 'lights': lights}
 
@@ -604,6 +637,10 @@ SCENES = {
         {'sphere': {'center': [-1.6, 0.5, -1], 'radius': 0.5, 'material': 'mirror'}},
     ], {'position': [0, 1.2, 3.2], 'look_at': [0, 0.7, 0], 'fov': 55}, max_depth=4),
 }
+
+# more samples: the eye cone narrows by sqrt(samples) (4: stratified 2 × 2, 9: 3 × 3)
+SCENES['checker_floor_s4'] = scene(SCENES['checker_floor']['objects'], SCENES['checker_floor']['camera'], w=48, h=27, samples=4)
+SCENES['image_spheres_s9'] = scene(SCENES['image_spheres']['objects'], SCENES['image_spheres']['camera'], w=32, h=18, samples=9)
 
 
 def main():
