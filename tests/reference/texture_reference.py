@@ -128,6 +128,13 @@ def load_image(name, encoding):
     key = (name, encoding)
     if key in IMAGES:
         return IMAGES[key]
+    if name.lower().endswith('.exr'):  # R, G, B of the first layer, binary32 (half widened exactly)
+        import OpenEXR
+        ch = OpenEXR.File(os.path.join(TEXDIR, name), separate_channels=True).channels()
+        L0 = np.stack([ch[c].pixels.astype(np.float32) for c in 'RGB'], axis=2)
+        assert np.isfinite(L0).all() and (L0 >= 0).all()
+        IMAGES[key] = pyramid(L0)
+        return IMAGES[key]
     codes, bd = read_png(os.path.join(TEXDIR, name))
     maxv = float(2 ** bd - 1)
     memo = {}
@@ -140,6 +147,10 @@ def load_image(name, encoding):
         return memo[v]
     h, w = codes.shape[:2]
     L0 = np.array([[[texel(int(codes[y, x, c])) for c in range(3)] for x in range(w)] for y in range(h)], dtype=np.float32)
+    IMAGES[key] = pyramid(L0)
+    return IMAGES[key]
+
+def pyramid(L0):
     levels = [L0]
     while levels[-1].shape[0] > 1 or levels[-1].shape[1] > 1:
         L = levels[-1]; lh, lw = L.shape[:2]
@@ -150,7 +161,6 @@ def load_image(name, encoding):
         nxt = ((a + b) + (c + d)) * np.float32(0.25)  # all binary32
         assert nxt.dtype == np.float32
         levels.append(nxt)
-    IMAGES[key] = levels
     return levels
 
 def bilinear(level, u, v):
@@ -546,6 +556,19 @@ def make_textures():
                            'v -1 0 1\nv 1 0 1\nv 1 0 -1\nv -1 0 -1\n'
                            'vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 1 0.25 0\nvn 1 0.3 0.1\n'
                            'f 1/1/1 2/2/2 3/3/1 4/4/2\n')
+    try:
+        import OpenEXR
+    except ImportError:
+        OpenEXR = None
+    p = os.path.join(TEXDIR, 'half.exr')  # 9 × 6 half RGB: values above 1, zeros, subnormal halves
+    if OpenEXR and not os.path.exists(p):
+        v = rng.gamma(1.0, 0.6, (6, 9, 3)).astype(np.float16)
+        v[0, 0] = 0; v[1, 2, 1] = np.float16(3e-7); v[2, 3] = np.float16(6.0)
+        OpenEXR.File({'compression': OpenEXR.ZIP_COMPRESSION, 'type': OpenEXR.scanlineimage}, {'RGB': v}).write(p)
+    p = os.path.join(TEXDIR, 'float.exr')  # 5 × 4 float RGBA (alpha ignored)
+    if OpenEXR and not os.path.exists(p):
+        v = rng.uniform(0, 1.5, (4, 5, 4)).astype(np.float32)
+        OpenEXR.File({'compression': OpenEXR.NO_COMPRESSION, 'type': OpenEXR.scanlineimage}, {'RGBA': v}).write(p)
     p = os.path.join(TEXDIR, 'quad_uv.obj')
     if not os.path.exists(p):
         open(p, 'w').write('# a quad in y = 0 with texture coordinates (two repeats along u), CCW from +y\n'
@@ -638,6 +661,16 @@ SCENES = {
     ], {'position': [0, 1.2, 3.2], 'look_at': [0, 0.7, 0], 'fov': 55}, max_depth=4),
 }
 
+# EXR textures (needs the OpenEXR module; skipped without it)
+EXR_MATERIALS = dict(MATERIALS,
+                     half={'diffuse': {'image': 'half.exr', 'scale': [2, 3]}, 'ambient': {'image': 'half.exr'}, 'specular': [0.3, 0.3, 0.3], 'shininess': 40},
+                     float32={'diffuse': {'image': 'float.exr'}, 'ambient': [0.05, 0.05, 0.05], 'specular': [0.5, 0.5, 0.5], 'shininess': 90})
+SCENES['exr'] = dict(scene([
+    {'plane': {'point': [0, -1, 0], 'normal': [0, 1, 0], 'material': 'half'}},
+    {'sphere': {'center': [0, 0, -2], 'radius': 1, 'material': 'float32'}},
+    {'mesh': {'file': 'quad_uv.obj', 'material': 'half', 'shading': 'flat', 'translate': [2, 0, -3], 'rotate': [90, -30, 0]}},
+], {'position': [0, 0.8, 3], 'look_at': [0, -0.3, -2], 'fov': 70}), materials=EXR_MATERIALS)
+
 # more samples: the eye cone narrows by sqrt(samples) (4: stratified 2 × 2, 9: 3 × 3)
 SCENES['checker_floor_s4'] = scene(SCENES['checker_floor']['objects'], SCENES['checker_floor']['camera'], w=48, h=27, samples=4)
 SCENES['image_spheres_s9'] = scene(SCENES['image_spheres']['objects'], SCENES['image_spheres']['camera'], w=32, h=18, samples=9)
@@ -650,6 +683,12 @@ def main():
     total = [0, 0]
     for name in names:
         d = SCENES[name]
+        if name == 'exr':
+            try:
+                import OpenEXR  # noqa: F401
+            except ImportError:
+                print('exr: skipped (no OpenEXR module)')
+                continue
         ypath = os.path.join(TEXDIR, name + '.yaml')
         open(ypath, 'w').write(mr.to_yaml(d))
         sc = TexScene(d)
