@@ -646,11 +646,14 @@ SCENES = {
         {'mesh': {'file': 'quad_uv.obj', 'material': 'rgba8_fine', 'shading': 'constant', 'translate': [-2.6, 0.9, -3.5], 'scale': [0.8, 1, 1.3], 'rotate': [75, 35, 0]}},
         {'mesh': {'file': 'quad_vn.obj', 'material': 'rgba8', 'shading': 'phong', 'translate': [-0.2, -0.7, 0.6], 'scale': 0.8, 'rotate': [0, 0, -25]}},
     ], {'position': [0, 1.2, 3.5], 'look_at': [0, -0.3, -1.5], 'fov': 70}),
-    # a mirror sphere reflecting a checker floor: the cone's curvature term s + 2·W/R
+    # a mirror sphere reflecting a checker floor: the cone's curvature term s + 2·W/R; a mirror
+    # mesh quad and a mirror plane (c = 0: the spread goes on, the width restarts at W)
     'mirror_checker': scene([
         FLOOR,
         {'sphere': {'center': [0, 1, -1], 'radius': 1, 'material': 'mirror'}},
         {'sphere': {'center': [2, 0.5, -2], 'radius': 0.5, 'material': 'rgb8'}},
+        {'mesh': {'file': 'quad_uv.obj', 'material': 'mirror', 'shading': 'flat', 'translate': [-2.2, 0.9, -1.5], 'scale': 0.9, 'rotate': [90, 35, 0]}},
+        {'plane': {'point': [0, 0, -6], 'normal': [0.2, 0, 1], 'material': 'mirror'}},
     ], {'position': [0, 1.4, 3], 'look_at': [0, 0.8, -1], 'fov': 55}, max_depth=4),
     # a glass sphere before a checker wall and floor: trees, transmission keeps the spread
     'glass_checker': scene([
