@@ -664,6 +664,14 @@ SCENES = {
     ], {'position': [0, 1.2, 3.2], 'look_at': [0, 0.7, 0], 'fov': 55}, max_depth=4),
 }
 
+# straight down onto a sphere's north pole: the centre pixel (odd size) hits q = (0, 1, 0) exactly,
+# so ρ = 0 (Fu = +∞, the last level), and d × n = 0 (the footprint's fallback axis)
+SCENES['pole'] = scene([
+    {'plane': {'point': [0, -1, 0], 'normal': [0, 1, 0], 'material': 'tiles'}},
+    {'sphere': {'center': [0, 0, 0], 'radius': 1, 'material': 'rgba8'}},
+    {'sphere': {'center': [2, 0, 0], 'radius': 0.8, 'material': 'tiles_amb'}},
+], {'position': [0, 4, 0], 'look_at': [0, 0, 0], 'up': [0, 0, -1], 'fov': 60}, w=33, h=19)
+
 # EXR textures (needs the OpenEXR module; skipped without it)
 EXR_MATERIALS = dict(MATERIALS,
                      half={'diffuse': {'image': 'half.exr', 'scale': [2, 3]}, 'ambient': {'image': 'half.exr'}, 'specular': [0.3, 0.3, 0.3], 'shininess': 40},
