@@ -420,3 +420,50 @@ fn bad_textures_are_refused_with_file_line_and_field() {
         assert!(err.contains(words), "{yaml}: {err}");
     }
 }
+
+/// An EXR whose first part holds only Y (and is larger) and whose second holds R, G and B:
+/// the texture is the second part, sized as it is.
+#[test]
+fn an_exr_texture_is_its_first_part_with_r_g_and_b() {
+    use exr::prelude::*;
+    let tmp = scratch("tex-exr-parts");
+    let channel = |name: &str, v: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(v));
+    let luma = Layer::new(
+        (8, 8),
+        LayerAttributes::named("luma"),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(vec![channel("Y", vec![0.5; 64])].into()),
+    );
+    let colour = Layer::new(
+        (2, 2),
+        LayerAttributes::named("colour"),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(
+            vec![
+                channel("R", vec![1.0, 0.0, 0.0, 0.25]),
+                channel("G", vec![0.0, 1.0, 0.0, 0.25]),
+                channel("B", vec![0.0, 0.0, 1.0, 0.25]),
+            ]
+            .into(),
+        ),
+    );
+    let image = Image::from_layers(
+        ImageAttributes::new(IntegerBounds::from_dimensions((8, 8))),
+        vec![luma, colour],
+    );
+    image.write().to_file(tmp.join("parts.exr")).unwrap();
+    let seq = ambient_scene(
+        &tmp,
+        "plane: { point: [0, 0, 0], normal: [0, 1, 0], material: m }",
+        "{ image: parts.exr }",
+    );
+    let Some(Texture::Image { image, .. }) = &seq.scene.materials[0].ambient_map else {
+        panic!("an image map");
+    };
+    let l0 = &image.levels[0];
+    assert_eq!((l0.width, l0.height), (2, 2));
+    assert_eq!(
+        l0.texels,
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.25; 3]]
+    );
+}

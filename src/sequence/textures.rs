@@ -232,17 +232,19 @@ fn decode_table(linear: bool) -> Vec<f32> {
         .collect()
 }
 
-/// An EXR's first layer with R, G and B channels, as f32 (values that are not finite, or
-/// negative, are refused: a texture is a reflectance).
+/// The first part of an EXR with channels named R, G and B (others are ignored; alpha too),
+/// as f32 (values that are not finite, or negative, are refused: a texture is a
+/// reflectance).
 fn exr_texels(bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>), String> {
     use exr::prelude::*;
     let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
         .map_err(|e| format!("unreadable EXR: {e}"))?;
-    let Some(header) = meta.headers.first() else {
-        return Err("unreadable EXR: no layer".into());
-    };
-    let size = header.layer_size;
-    let (w, h) = check_size(size.width() as u64, size.height() as u64)?;
+    // Every part is sized before any is decoded: the one read is the first with R, G and B
+    // channels, and none may be larger than a texture can be.
+    for header in &meta.headers {
+        let size = header.layer_size;
+        check_size(size.width() as u64, size.height() as u64)?;
+    }
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -255,7 +257,11 @@ fn exr_texels(bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>), String> {
         .first_valid_layer()
         .all_attributes()
         .from_buffered(std::io::Cursor::new(bytes))
-        .map_err(|e| format!("unreadable EXR (it needs R, G and B channels): {e}"))?;
+        .map_err(|e| {
+            format!("unreadable EXR (a texture needs a part with channels named R, G and B): {e}")
+        })?;
+    let size = image.layer_data.size;
+    let (w, h) = check_size(size.width() as u64, size.height() as u64)?;
     let texels = image.layer_data.channel_data.pixels.1;
     if texels.iter().flatten().any(|v| !v.is_finite() || *v < 0.0) {
         return Err(
