@@ -347,46 +347,5 @@ fn bad_meshes_are_refused_with_file_line_and_field() {
 /// from the origin) and compares them with rayreel's frames: every byte must agree.
 #[test]
 fn the_independent_reference_reproduces_mesh_frames() {
-    let have = std::process::Command::new("python3")
-        .args(["-c", "import numpy, PIL"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !have {
-        assert_ne!(
-            std::env::var("RAYREEL_REQUIRE_TOOLS").as_deref(),
-            Ok("1"),
-            "python3 with numpy and Pillow is required (RAYREEL_REQUIRE_TOOLS=1)"
-        );
-        eprintln!("SKIPPED: python3 with numpy and Pillow is not installed");
-        return;
-    }
-    let tmp = scratch("mesh-reference");
-    let from = common::repo().join("tests/reference");
-    std::fs::copy(
-        from.join("mesh_reference.py"),
-        tmp.join("mesh_reference.py"),
-    )
-    .unwrap();
-    std::fs::create_dir(tmp.join("mesh")).unwrap();
-    for e in std::fs::read_dir(from.join("mesh")).unwrap() {
-        let p = e.unwrap().path();
-        std::fs::copy(&p, tmp.join("mesh").join(p.file_name().unwrap())).unwrap();
-    }
-    let out = std::process::Command::new("python3")
-        .arg("mesh_reference.py")
-        .current_dir(&tmp)
-        .env("RAYREEL", env!("CARGO_BIN_EXE_rayreel"))
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{text}{}", stderr(&out));
-    let total = text
-        .lines()
-        .find_map(|l| l.strip_prefix("total: "))
-        .unwrap_or_else(|| panic!("no total in {text}"));
-    let (equal, all) = total
-        .trim_end_matches(" channel bytes equal")
-        .split_once('/')
-        .unwrap();
-    assert_eq!(equal, all, "{text}");
+    common::independent_reference(&["mesh_reference.py"], "mesh");
 }

@@ -36,6 +36,9 @@ fn linear(v: u8) -> f64 {
     f64::from(y as f32)
 }
 
+/// Texture coordinates of the four texel centres, in the order of `TEXELS`.
+const CENTRES: [(f64, f64); 4] = [(0.25, 0.75), (0.75, 0.75), (0.25, 0.25), (0.75, 0.25)];
+
 fn texel(i: usize) -> DVec3 {
     DVec3::from_array(TEXELS[i].map(linear))
 }
@@ -81,10 +84,7 @@ fn a_floor_maps_u_along_x_and_v_along_minus_z() {
         "plane: { point: [0, 0, 0], normal: [0, 1, 0], material: m }",
         "{ image: t.png }",
     );
-    for (i, (u, v)) in [(0.25, 0.75), (0.75, 0.75), (0.25, 0.25), (0.75, 0.25)]
-        .into_iter()
-        .enumerate()
-    {
+    for (i, (u, v)) in CENTRES.into_iter().enumerate() {
         let p = DVec3::new(u, 0.0, -v);
         close(
             ray_colour(&seq, p + DVec3::Y, p),
@@ -119,10 +119,7 @@ fn a_sphere_maps_longitude_and_latitude_with_north_at_the_top() {
     );
     let centre = DVec3::new(1.0, 2.0, 3.0);
     let pi = std::f64::consts::PI;
-    for (i, (u, v)) in [(0.25, 0.75), (0.75, 0.75), (0.25, 0.25), (0.75, 0.25)]
-        .into_iter()
-        .enumerate()
-    {
+    for (i, (u, v)) in CENTRES.into_iter().enumerate() {
         let (phi, theta) = ((0.5 - u) * 2.0 * pi, (1.0 - v) * pi);
         let q = DVec3::new(
             theta.sin() * phi.cos(),
@@ -149,10 +146,7 @@ fn a_mesh_takes_its_file_uvs() {
         "mesh: { file: quad.obj, material: m }",
         "{ image: t.png }",
     );
-    for (i, (u, v)) in [(0.25, 0.75), (0.75, 0.75), (0.25, 0.25), (0.75, 0.25)]
-        .into_iter()
-        .enumerate()
-    {
+    for (i, (u, v)) in CENTRES.into_iter().enumerate() {
         let p = DVec3::new(4.0 * u, 4.0 * v, 0.0);
         close(
             ray_colour(&seq, p + DVec3::Z, p),

@@ -335,3 +335,50 @@ pub fn signal(child: &std::process::Child, signal: i32) {
     // SAFETY: sends a signal to our own child, which has not been reaped.
     unsafe { libc::kill(child.id() as i32, signal) };
 }
+
+/// Runs an independent reference implementation from `tests/reference/` (`scripts[0]`, the
+/// other scripts it imports, and its `scenes` folder, copied to a scratch directory) against
+/// this rayreel, and asserts that it reports every channel byte equal (`total: A/A channel
+/// bytes equal`). Skipped without python3, numpy and Pillow, unless RAYREEL_REQUIRE_TOOLS=1.
+pub fn independent_reference(scripts: &[&str], scenes: &str) {
+    let have = Command::new("python3")
+        .args(["-c", "import numpy, PIL"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !have {
+        assert_ne!(
+            std::env::var("RAYREEL_REQUIRE_TOOLS").as_deref(),
+            Ok("1"),
+            "python3 with numpy and Pillow is required (RAYREEL_REQUIRE_TOOLS=1)"
+        );
+        eprintln!("SKIPPED: python3 with numpy and Pillow is not installed");
+        return;
+    }
+    let tmp = scratch(scenes);
+    let from = repo().join("tests/reference");
+    for script in scripts {
+        std::fs::copy(from.join(script), tmp.join(script)).unwrap();
+    }
+    std::fs::create_dir(tmp.join(scenes)).unwrap();
+    for e in std::fs::read_dir(from.join(scenes)).unwrap() {
+        let p = e.unwrap().path();
+        std::fs::copy(&p, tmp.join(scenes).join(p.file_name().unwrap())).unwrap();
+    }
+    let out = Command::new("python3")
+        .arg(scripts[0])
+        .current_dir(&tmp)
+        .env("RAYREEL", env!("CARGO_BIN_EXE_rayreel"))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}{}", stderr(&out));
+    let total = text
+        .lines()
+        .find_map(|l| l.strip_prefix("total: "))
+        .unwrap_or_else(|| panic!("no total in {text}"));
+    let (equal, all) = total
+        .trim_end_matches(" channel bytes equal")
+        .split_once('/')
+        .unwrap();
+    assert_eq!(equal, all, "{text}");
+}
