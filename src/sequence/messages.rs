@@ -133,16 +133,7 @@ pub(super) fn got_num(v: f64) -> String {
     got(num(v))
 }
 
-/// A number as messages show it: its shortest decimal that reads back as the same f64, so a
-/// value just past a limit never shows as the limit (`360.0001`, not `360`); plain from 1e-5
-/// up to 1e16, in exponent form beyond (`1e-300`, `1.7976931348623157e308`), so at most 17
-/// significant digits and never hundreds of characters.
-pub(crate) fn num(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() || (1e-5..1e16).contains(&v.abs()) {
-        return format!("{v}");
-    }
-    format!("{v:e}")
-}
+pub(crate) use crate::console::num;
 
 /// A number rounded to 6 significant digits, for figures rayreel computes (a duration of
 /// 100 frames at 24 fps is `4.16667` s), plain from 1e-4 up to 1e6 and in exponent form

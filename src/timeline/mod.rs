@@ -263,7 +263,7 @@ impl Timeline {
     pub(crate) fn fps_text(&self) -> String {
         match self.clock.fraction {
             Some((num, den)) => format!("{num}/{den}"),
-            None => crate::sequence::num(self.fps),
+            None => crate::console::num(self.fps),
         }
     }
 
