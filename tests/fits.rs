@@ -164,6 +164,7 @@ fn ctrl_c_while_piping_says_so_at_once_and_exits_130() {
     stdout.read_exact(&mut frame).unwrap();
     // The terminal signals the whole pipeline: rayreel, and the reader, which then exits.
     let sent = Instant::now();
+    // SAFETY: kill only sends a signal to our own child process.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
     drop(stdout);
     let status = child.wait().unwrap();
@@ -453,6 +454,7 @@ fn ctrl_c_in_json_mode_is_json_too() {
             break;
         }
     }
+    // SAFETY: kill only sends a signal to our own child process.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
     let mut rest = String::new();
     stderr.read_to_string(&mut rest).unwrap();

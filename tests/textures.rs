@@ -373,6 +373,7 @@ fn bad_textures_are_refused_with_file_line_and_field() {
     std::fs::write(tmp.join("wide.png"), huge).unwrap();
     // A FIFO at a texture's name is refused without blocking the load.
     let fifo = std::ffi::CString::new(tmp.join("pipe.png").to_str().unwrap()).unwrap();
+    // SAFETY: mkfifo reads a valid NUL-terminated path and nothing else.
     assert_eq!(unsafe { libc::mkfifo(fifo.as_ptr(), 0o644) }, 0);
     let plane = |map: &str| {
         format!(
