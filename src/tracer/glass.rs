@@ -244,7 +244,7 @@ pub(super) fn trace_tree<V: Lanes>(
             if !hit.hit.any() {
                 continue;
             }
-            let at = shade_hit(world, &b.rays, &hit, rays);
+            let at = shade_hit(world, &b.rays, &hit, eye.lights, rays);
             color = V3::select(hit.hit, color + at.local * b.weight, color);
             if depth + 1 == max_depth {
                 continue;

@@ -43,6 +43,8 @@ pub struct World {
     branches: bool,
     /// The hierarchy of each of `scene.meshes`, built once and shared by every placement.
     bvhs: Vec<Arc<bvh::Bvh>>,
+    /// Some light is an area light: eye samples then carry their pixels' light seeds.
+    area_lights: bool,
 }
 
 impl World {
@@ -60,6 +62,7 @@ impl World {
         });
         World {
             branches: scene.materials.iter().any(|m| m.branches()),
+            area_lights: scene.lights.iter().any(|l| l.area_samples().is_some()),
             scene,
             geometry,
             opaque,
@@ -85,6 +88,7 @@ impl World {
             opaque: self.opaque.as_ref().map(|g| g.shifted(by, PAD)),
             branches: self.branches,
             bvhs: self.bvhs.clone(),
+            area_lights: self.area_lights,
         }
     }
 

@@ -6,8 +6,8 @@
 
 use super::accel::{FromOrigin, Rays};
 use super::intersect::Ray;
-use super::sample::{Dims, Pattern, Seed};
-use super::shade::{self, Eye};
+use super::sample::{self, Dims, Pattern, Seed};
+use super::shade::{self, Eye, LightSeeds};
 use super::{Sampler, Samples, Settings, World, finite};
 use crate::camera::{Camera, screen_points};
 use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
@@ -233,6 +233,11 @@ fn packet<V: Lanes>(
         V3::<V>::splat(DVec3::INFINITY),
         V3::<V>::splat(DVec3::NEG_INFINITY),
     );
+    // Area lights only: each pixel's light state, for the points its samples take on them.
+    let light_seeds = pass
+        .world
+        .area_lights
+        .then(|| per_lane(V::N, 0, |k| sample::light_seed(pass.frame, pixel(k))));
     let dims = pass.exposure.map(|_| {
         per_lane(V::N, Dims::new(pattern, 0, 0), |k| {
             Dims::new(pattern, pass.frame, pixel(k))
@@ -240,12 +245,14 @@ fn packet<V: Lanes>(
     });
     for k in (first..end).take_while(|_| !pass.stopped()) {
         let (u, v) = offsets::<V>(pattern, &seeds, k);
+        let lights = light_seeds.as_ref().map(|seeds| LightSeeds { seeds, k });
         let eye = match (pass.exposure, &dims) {
             (Some(exposure), Some(dims)) => Eye {
                 rays: sampled_rays(pass, exposure, row, col, u, v, (pattern, dims, k)),
                 active: V::M::from_bits(px.valid),
                 from_origin: None,
                 transparent: s.alpha,
+                lights,
             },
             _ => Eye {
                 rays: Rays {
@@ -256,6 +263,7 @@ fn packet<V: Lanes>(
                 active: V::M::from_bits(px.valid),
                 from_origin: Some(pass.from_origin),
                 transparent: s.alpha,
+                lights,
             },
         };
         let (c, covered) = shade::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays);
@@ -527,6 +535,7 @@ pub(super) fn rays<V: Lanes>(
             active: V::M::first(chunk.len()),
             from_origin: None,
             transparent: false,
+            lights: None,
         };
         let (c, _) = shade::trace_packet(world, &eye, max_depth, &mut cast);
         for (k, o) in out.iter_mut().enumerate() {
