@@ -6,6 +6,7 @@
 //! count, order of work or lane width.
 
 pub mod accel;
+mod area;
 pub(crate) mod bvh;
 pub mod glass;
 pub mod intersect;
