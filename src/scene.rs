@@ -255,6 +255,24 @@ pub enum Light {
     Ambient {
         color: DVec3,
     },
+    /// A sphere that emits: each shading point samples the disk through `center` facing it,
+    /// `samples` points a sample, each a point light with 1/samples of `intensity`.
+    Sphere {
+        center: DVec3,
+        radius: f64,
+        samples: u32,
+        intensity: Intensity,
+    },
+    /// A one-sided parallelogram, corner + x·edge_u + y·edge_v for x, y in [0, 1), emitting
+    /// towards `normal`, the unit edge_u × edge_v; sampled like a sphere light.
+    Rect {
+        corner: DVec3,
+        edge_u: DVec3,
+        edge_v: DVec3,
+        normal: DVec3,
+        samples: u32,
+        intensity: Intensity,
+    },
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -328,17 +346,38 @@ impl Shape {
 }
 
 impl Light {
-    /// Where a point or spot light is; None for directional and ambient light.
+    /// Where a point or spot light is, or an area light's centre; None for directional and
+    /// ambient light.
     pub fn position(&self) -> Option<DVec3> {
         match *self {
             Light::Point { position, .. } | Light::Spot { position, .. } => Some(position),
+            Light::Sphere { center, .. } => Some(center),
+            Light::Rect {
+                corner,
+                edge_u,
+                edge_v,
+                ..
+            } => Some(corner + 0.5 * edge_u + 0.5 * edge_v),
             Light::Directional { .. } | Light::Ambient { .. } => None,
         }
     }
 
+    /// The points an area light (sphere or rect) takes for each eye sample; None for the
+    /// others.
+    pub fn area_samples(&self) -> Option<u32> {
+        match *self {
+            Light::Sphere { samples, .. } | Light::Rect { samples, .. } => Some(samples),
+            _ => None,
+        }
+    }
+
     fn shifted(mut self, by: DVec3) -> Light {
-        if let Light::Point { position, .. } | Light::Spot { position, .. } = &mut self {
-            *position -= by;
+        if let Light::Point { position: p, .. }
+        | Light::Spot { position: p, .. }
+        | Light::Sphere { center: p, .. }
+        | Light::Rect { corner: p, .. } = &mut self
+        {
+            *p -= by;
         }
         self
     }

@@ -498,6 +498,37 @@ camera: {{ position: [0.3, 1.2, 4], look_at: [0, 0, -0.3], fov: 60 }}
     );
 }
 
+/// Sphere and rect lights (their points are placed per lane, in f64, from each lane's own
+/// surface point and pixel) over spheres, a plane, glass, a mirror and meshes in every
+/// shading model, at one sample, a grid, R2 and adaptive sampling, with a lens.
+#[test]
+fn area_light_frames_from_every_kernel_equal_the_scalar_kernels() {
+    let tmp = scratch("kernels-area");
+    std::fs::write(tmp.join("ball.obj"), common::uv_sphere(14, 7, true, false)).unwrap();
+    let soft = std::fs::read_to_string(common::repo().join("sequences/soft-shadows.yaml")).unwrap();
+    std::fs::write(tmp.join("seq.yaml"), &soft).unwrap();
+    every_kernel_equals_scalar(&tmp, "soft", &["--size", "97x55", "--samples", "1"]);
+    every_kernel_equals_scalar(
+        &tmp,
+        "soft-final",
+        &["--size", "65x37", "--quality", "final"],
+    );
+    let extra = "objects:
+  - mesh: { file: ball.obj, shading: gouraud, scale: 0.3, translate: [0.2, 0.3, 1.5], material: { diffuse: [0.3, 0.3, 0.7], specular: [1, 1, 1] } }
+  - mesh: { file: ball.obj, shading: phong, scale: 0.25, translate: [-1.6, 0.25, 1.2], material: { diffuse: [0.7, 0.6, 0.2], specular: [1, 1, 1], shininess: 30 } }
+  - sphere: { center: [0.6, 0.3, 2.0], radius: 0.3, material: { diffuse: [0, 0, 0], transmission: 0.9, ior: 1.5, fresnel: true } }
+  - sphere: { center: [-0.2, 3.3, 0.6], radius: 0.2, material: { diffuse: [0.5, 0.5, 0.5] } }
+";
+    let scene = soft.replacen("objects:\n", extra, 1).replacen(
+        "  fov: 60\n",
+        "  fov: 60\n  aperture: 0.05\n",
+        1,
+    );
+    std::fs::write(tmp.join("seq.yaml"), scene).unwrap();
+    every_kernel_equals_scalar(&tmp, "mixed-grid", &["--size", "81x46", "--samples", "4"]);
+    every_kernel_equals_scalar(&tmp, "mixed-r2", &["--size", "65x37", "--samples", "3"]);
+}
+
 #[test]
 fn blurred_and_defocused_frames_from_every_kernel_equal_the_scalar_kernels() {
     let tmp = scratch("kernels-film");

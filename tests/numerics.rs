@@ -313,6 +313,20 @@ fn transform(seq: &mut Sequence, s: f64, offset: DVec3) {
             Light::Point { position, .. } | Light::Spot { position, .. } => {
                 *position = map(*position)
             }
+            Light::Sphere { center, radius, .. } => {
+                *center = map(*center);
+                *radius *= s;
+            }
+            Light::Rect {
+                corner,
+                edge_u,
+                edge_v,
+                ..
+            } => {
+                *corner = map(*corner);
+                *edge_u *= s;
+                *edge_v *= s;
+            }
             Light::Directional { .. } | Light::Ambient { .. } => {}
         }
     }

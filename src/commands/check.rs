@@ -27,17 +27,21 @@ pub(crate) const ENORMOUS_RAYS: f64 = 1e12;
 const RAYS_PER_SECOND: f64 = 3e7;
 
 /// An upper bound on the rays one frame traces: pixels × samples (adaptive: its maximum) ×
-/// (1 + lights that cast shadows) × max_depth, since each surface a path visits sends one ray
-/// on and at most one shadow ray per light.
+/// (1 + shadow rays per surface) × max_depth, since each surface a path visits sends one ray
+/// on and at most one shadow ray per point, spot or directional light and `samples` per area
+/// light.
 pub(crate) fn rays_per_frame(seq: &Sequence) -> f64 {
     let s = &seq.settings;
     let samples = s.adaptive.map_or(s.samples, |a| a.max_samples);
-    let shadows = seq
+    let shadows: u64 = seq
         .scene
         .lights
         .iter()
-        .filter(|l| !matches!(l, Light::Ambient { .. }))
-        .count();
+        .map(|l| match l {
+            Light::Ambient { .. } => 0,
+            _ => l.area_samples().map_or(1, u64::from),
+        })
+        .sum();
     f64::from(s.width)
         * f64::from(s.height)
         * f64::from(samples)
@@ -51,8 +55,12 @@ pub(crate) fn cost(seq: &Sequence, frames: u64) -> (String, Option<String>) {
     let frame = rays_per_frame(seq);
     let total = frame * frames as f64;
     let line = format!(
-        "up to {frame:.2e} rays a frame, {total:.2e} for {frames} frame{} (pixels × samples × (1 + lights) × max_depth)",
-        if frames == 1 { "" } else { "s" }
+        "up to {frame:.2e} rays a frame, {total:.2e} for {frames} frame{} (pixels × samples × (1 + {}) × max_depth)",
+        if frames == 1 { "" } else { "s" },
+        match seq.scene.lights.iter().any(|l| l.area_samples().is_some()) {
+            true => "shadow rays: 1 a light, `samples` an area light",
+            false => "lights",
+        }
     );
     let warning = (total > ENORMOUS_RAYS).then(|| {
         format!(
@@ -81,12 +89,13 @@ fn duration(seconds: f64) -> String {
 pub(crate) fn summary(file: &str, seq: &Sequence) -> String {
     let (scene, s) = (&seq.scene, &seq.settings);
     format!(
-        "{file}: ok\n  objects:    {}\n{}  materials:  {}\n{}  lights:     {}\n  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}  output:     {}\n",
+        "{file}: ok\n  objects:    {}\n{}  materials:  {}\n{}  lights:     {}\n{}  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}  output:     {}\n",
         objects(scene),
         super::meshes::summary(scene),
         scene.materials.len(),
         textures(scene),
         lights(scene),
+        penumbra_notes(scene, s),
         s.width,
         s.height,
         s.max_depth,
@@ -169,28 +178,75 @@ fn textures(scene: &Scene) -> String {
     out
 }
 
-/// The `lights:` line: `2 (1 point, 1 ambient)`, or `0 (none)`.
+/// The `lights:` line: `2 (1 point, 1 ambient)`, or `0 (none)`; area lights with their
+/// points per eye sample: `1 sphere (16 samples)`, `2 rect (16 and 64 samples)`.
 fn lights(scene: &Scene) -> String {
-    let mut kinds = [0usize; 4];
+    let mut kinds = [0usize; 6];
+    let mut samples: [Vec<String>; 6] = Default::default();
     for l in &scene.lights {
-        kinds[match l {
+        let kind = match l {
             Light::Point { .. } => 0,
             Light::Directional { .. } => 1,
             Light::Spot { .. } => 2,
             Light::Ambient { .. } => 3,
-        }] += 1;
+            Light::Sphere { .. } => 4,
+            Light::Rect { .. } => 5,
+        };
+        kinds[kind] += 1;
+        if let Some(n) = l.area_samples() {
+            samples[kind].push(n.to_string());
+        }
     }
-    let light_list: Vec<String> = ["point", "directional", "spot", "ambient"]
+    let light_list: Vec<String> = ["point", "directional", "spot", "ambient", "sphere", "rect"]
         .iter()
         .zip(kinds)
-        .filter(|(_, n)| *n > 0)
-        .map(|(k, n)| format!("{n} {k}"))
+        .zip(samples)
+        .filter(|((_, n), _)| *n > 0)
+        .map(|((k, n), s)| match s.is_empty() {
+            true => format!("{n} {k}"),
+            false => format!("{n} {k} ({} samples)", list(&s)),
+        })
         .collect();
     let list = match light_list.is_empty() {
         true => "none".to_string(),
         false => light_list.join(", "),
     };
     format!("{} ({list})", scene.lights.len())
+}
+
+/// `16`, `16 and 64`, `4, 16 and 64`.
+fn list(items: &[String]) -> String {
+    match items {
+        [] => String::new(),
+        [one] => one.clone(),
+        [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
+    }
+}
+
+/// Light points per pixel below which an area light's penumbra shows noise: 64 points give
+/// a visible fraction to about 1/64 in the worst case, a couple of 8-bit levels in sRGB.
+pub(crate) const QUIET_PENUMBRA: u64 = 64;
+
+/// A note under `lights:` for each area light whose points per pixel, `samples` × the pixel
+/// samples every pixel gets (`render.samples`; adaptive passes add more only where they
+/// see noise), are below `QUIET_PENUMBRA`.
+fn penumbra_notes(scene: &Scene, s: &Settings) -> String {
+    let mut out = String::new();
+    for (i, l) in scene.lights.iter().enumerate() {
+        let Some(m) = l.area_samples() else { continue };
+        let points = u64::from(m) * u64::from(s.samples);
+        if points < QUIET_PENUMBRA {
+            let kind = match l {
+                Light::Sphere { .. } => "sphere",
+                _ => "rect",
+            };
+            out.push_str(&format!(
+                "              note: lights[{i}] ({kind}): {m} samples × {} = {points} points on the light per pixel, under {QUIET_PENUMBRA}: its soft shadows will be noisy; raise its samples or render.samples\n",
+                noun(f64::from(s.samples), "pixel sample"),
+            ));
+        }
+    }
+    out
 }
 
 /// The `frames:` line: `144 at 24 fps (6 s), orbit of radius 3 (1 turn)`.

@@ -128,13 +128,6 @@ pub struct Pair<L>(L, L);
 #[derive(Clone, Copy)]
 pub struct PairMask<M>(M, M);
 
-impl<L: Lanes> Pair<L> {
-    #[inline(always)]
-    fn zip(self, o: Self, f: impl Fn(L, L) -> L) -> Self {
-        Pair(f(self.0, o.0), f(self.1, o.1))
-    }
-}
-
 impl<M: Mask> Mask for PairMask<M> {
     #[inline(always)]
     fn none_set() -> Self {
@@ -229,7 +222,7 @@ impl<L: Lanes> Lanes for Pair<L> {
     }
     #[inline(always)]
     fn copysign(self, s: Self) -> Self {
-        self.zip(s, L::copysign)
+        Pair(self.0.copysign(s.0), self.1.copysign(s.1))
     }
     #[inline(always)]
     fn lt(self, o: Self) -> Self::M {
@@ -253,11 +246,11 @@ impl<L: Lanes> Lanes for Pair<L> {
     }
     #[inline(always)]
     fn min(self, o: Self) -> Self {
-        self.zip(o, L::min)
+        Pair(self.0.min(o.0), self.1.min(o.1))
     }
     #[inline(always)]
     fn max(self, o: Self) -> Self {
-        self.zip(o, L::max)
+        Pair(self.0.max(o.0), self.1.max(o.1))
     }
 }
 

@@ -340,6 +340,20 @@ impl Canon for Light {
                 intensity,
             } => tagged(h, 2, &[position, axis, cos_inner, cos_outer, intensity]),
             Light::Ambient { color } => tagged(h, 3, &[color]),
+            Light::Sphere {
+                center,
+                radius,
+                samples,
+                intensity,
+            } => tagged(h, 4, &[center, radius, samples, intensity]),
+            Light::Rect {
+                corner,
+                edge_u,
+                edge_v,
+                normal,
+                samples,
+                intensity,
+            } => tagged(h, 5, &[corner, edge_u, edge_v, normal, samples, intensity]),
         }
     }
 }

@@ -302,6 +302,8 @@ pub struct Light {
     pub directional: Option<DirectionalLight>,
     pub spot: Option<SpotLight>,
     pub ambient: Option<AmbientLight>,
+    pub sphere: Option<SphereLight>,
+    pub rect: Option<RectLight>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -331,6 +333,31 @@ pub struct SpotLight {
     pub direction: V3,
     pub inner_angle: f64,
     pub outer_angle: f64,
+    #[serde(default)]
+    pub ambient: V3,
+    pub diffuse: V3,
+    pub specular: V3,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereLight {
+    pub center: V3,
+    pub radius: f64,
+    pub samples: Option<u64>,
+    #[serde(default)]
+    pub ambient: V3,
+    pub diffuse: V3,
+    pub specular: V3,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RectLight {
+    pub corner: V3,
+    pub edge_u: V3,
+    pub edge_v: V3,
+    pub samples: Option<u64>,
     #[serde(default)]
     pub ambient: V3,
     pub diffuse: V3,

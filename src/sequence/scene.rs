@@ -247,6 +247,8 @@ pub(super) fn light(path: &str, l: &raw::Light) -> Check<Light> {
             ("directional", l.directional.as_ref().map(|_| 1)),
             ("spot", l.spot.as_ref().map(|_| 2)),
             ("ambient", l.ambient.as_ref().map(|_| 3)),
+            ("sphere", l.sphere.as_ref().map(|_| 4)),
+            ("rect", l.rect.as_ref().map(|_| 5)),
         ],
     )?;
     Ok(match which {
@@ -267,6 +269,11 @@ pub(super) fn light(path: &str, l: &raw::Light) -> Check<Light> {
             }
         }
         2 => spot(&format!("{path}.spot"), l.spot.as_ref().expect("checked"))?,
+        4 => sphere_light(
+            &format!("{path}.sphere"),
+            l.sphere.as_ref().expect("checked"),
+        )?,
+        5 => rect_light(&format!("{path}.rect"), l.rect.as_ref().expect("checked"))?,
         _ => Light::Ambient {
             color: color(
                 &format!("{path}.ambient.color"),
@@ -304,5 +311,67 @@ pub(super) fn spot(path: &str, s: &raw::SpotLight) -> Check<Light> {
         cos_inner: libm::cos(inner.to_radians()),
         cos_outer: libm::cos(outer.to_radians()),
         intensity: intensity(path, s.ambient, s.diffuse, s.specular)?,
+    })
+}
+
+/// Default points an area light takes for each eye sample.
+pub(crate) const DEFAULT_LIGHT_SAMPLES: u32 = 16;
+/// Most points an area light may take for each eye sample.
+pub(crate) const MAX_LIGHT_SAMPLES: u64 = 4096;
+
+/// An area light's `samples`: 1 to 4096, 16 when absent.
+fn light_samples(path: &str, n: Option<u64>) -> Check<u32> {
+    match n {
+        None => Ok(DEFAULT_LIGHT_SAMPLES),
+        Some(n @ 1..=MAX_LIGHT_SAMPLES) => Ok(n as u32),
+        Some(n) => invalid(
+            format!("{path}.samples"),
+            format!(
+                "must be 1 to {MAX_LIGHT_SAMPLES} points on the light per eye sample {}",
+                got(n)
+            ),
+        ),
+    }
+}
+
+pub(super) fn sphere_light(path: &str, s: &raw::SphereLight) -> Check<Light> {
+    Ok(Light::Sphere {
+        center: vector(&format!("{path}.center"), s.center)?,
+        radius: in_range(
+            &format!("{path}.radius"),
+            s.radius,
+            MIN_RADIUS,
+            MAX_MAGNITUDE,
+            "a positive length in [1e-100, 1e100]",
+        )?,
+        samples: light_samples(path, s.samples)?,
+        intensity: intensity(path, s.ambient, s.diffuse, s.specular)?,
+    })
+}
+
+/// A rect light: its edges must span a parallelogram whose normal edge_u × edge_v has a
+/// finite, non-zero length (so it can be normalised).
+pub(super) fn rect_light(path: &str, r: &raw::RectLight) -> Check<Light> {
+    let corner = vector(&format!("{path}.corner"), r.corner)?;
+    let edge_u = direction(&format!("{path}.edge_u"), r.edge_u)?;
+    let edge_v = direction(&format!("{path}.edge_v"), r.edge_v)?;
+    let cross = edge_u.cross(edge_v);
+    let length = cross.length();
+    if !(length > 0.0 && length.is_finite()) {
+        return invalid(
+            format!("{path}.edge_v"),
+            format!(
+                "must not be parallel to edge_u: the rectangle needs an area, |edge_u × edge_v| finite and non-zero {}",
+                got(format!("{} × {}", fmt3(r.edge_u), fmt3(r.edge_v)))
+            ),
+        );
+    }
+    Ok(Light::Rect {
+        corner,
+        edge_u,
+        edge_v,
+        normal: cross * (1.0 / length),
+        samples: light_samples(path, r.samples)?,
+        intensity: intensity(path, r.ambient, r.diffuse, r.specular)?,
     })
 }

@@ -254,7 +254,7 @@ pub(super) fn trace_tree<V: Lanes>(
             } else {
                 None
             };
-            let at = shade_hit(world, &b.rays, &hit, rays, width);
+            let at = shade_hit(world, &b.rays, &hit, eye.lights, rays, width);
             color = V3::select(hit.hit, color + at.local * b.weight, color);
             if depth + 1 == max_depth {
                 continue;

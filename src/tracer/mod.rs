@@ -6,6 +6,7 @@
 //! count, order of work or lane width.
 
 pub mod accel;
+mod area;
 pub(crate) mod bvh;
 pub mod glass;
 pub mod intersect;
@@ -55,6 +56,8 @@ pub struct World {
     unshifted: Option<Arc<Scene>>,
     /// Each object's curvature for the cones (empty without textures).
     curvature: Vec<f64>,
+    /// Some light is an area light: eye samples then carry their pixels' light seeds.
+    area_lights: bool,
 }
 
 impl World {
@@ -73,6 +76,7 @@ impl World {
         let textured = scene.materials.iter().any(|m| m.textured());
         let mut world = World {
             branches: scene.materials.iter().any(|m| m.branches()),
+            area_lights: scene.lights.iter().any(|l| l.area_samples().is_some()),
             scene,
             geometry,
             opaque,
@@ -107,6 +111,7 @@ impl World {
             opaque: self.opaque.as_ref().map(|g| g.shifted(by, PAD)),
             branches: self.branches,
             bvhs: self.bvhs.clone(),
+            area_lights: self.area_lights,
             textured: self.textured,
             point_sampled: self.point_sampled,
             origin: self.origin + by,

@@ -6,8 +6,8 @@
 
 use super::accel::{FromOrigin, Rays};
 use super::intersect::Ray;
-use super::sample::{Dims, Pattern, Seed};
-use super::shade::{self, Eye};
+use super::sample::{self, Dims, Pattern, Seed};
+use super::shade::{self, Eye, LightSeeds};
 use super::{Sampler, Samples, Settings, World, finite};
 use crate::camera::{Camera, screen_points};
 use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
@@ -238,6 +238,11 @@ fn packet<V: Lanes>(
         true => 0.0,
         false => 2.0 * pass.camera.tan_half_fov / f64::from(s.width) / f64::from(s.samples).sqrt(),
     });
+    // Area lights only: each pixel's light state, for the points its samples take on them.
+    let light_seeds = pass
+        .world
+        .area_lights
+        .then(|| per_lane(V::N, 0, |k| sample::light_seed(pass.frame, pixel(k))));
     let dims = pass.exposure.map(|_| {
         per_lane(V::N, Dims::new(pattern, 0, 0), |k| {
             Dims::new(pattern, pass.frame, pixel(k))
@@ -245,6 +250,7 @@ fn packet<V: Lanes>(
     });
     for k in (first..end).take_while(|_| !pass.stopped()) {
         let (u, v) = offsets::<V>(pattern, &seeds, k);
+        let lights = light_seeds.as_ref().map(|seeds| LightSeeds { seeds, k });
         let eye = match (pass.exposure, &dims) {
             (Some(exposure), Some(dims)) => Eye {
                 rays: sampled_rays(pass, exposure, row, col, u, v, (pattern, dims, k)),
@@ -252,6 +258,7 @@ fn packet<V: Lanes>(
                 from_origin: None,
                 transparent: s.alpha,
                 footprint,
+                lights,
             },
             _ => Eye {
                 rays: Rays {
@@ -263,6 +270,7 @@ fn packet<V: Lanes>(
                 from_origin: Some(pass.from_origin),
                 transparent: s.alpha,
                 footprint,
+                lights,
             },
         };
         let (c, covered) = shade::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays);
@@ -535,6 +543,7 @@ pub(super) fn rays<V: Lanes>(
             from_origin: None,
             transparent: false,
             footprint: world.textured.then_some(0.0),
+            lights: None,
         };
         let (c, _) = shade::trace_packet(world, &eye, max_depth, &mut cast);
         for (k, o) in out.iter_mut().enumerate() {

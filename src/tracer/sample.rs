@@ -157,6 +157,49 @@ impl Dims {
     }
 }
 
+/// Separates the hashes of light samples from the others (SHA-256's second initial word).
+const LIGHTS: u64 = 0xbb67_ae85_84ca_a73b;
+
+/// A pixel's light state: what the points it takes on area lights depend on besides the
+/// light and the sample, mix(mix(mix(0x9e37_79b9_7f4a_7c15 ⊕ frame) ⊕ pixel) ⊕ LIGHTS).
+#[inline]
+pub fn light_seed(frame: u64, pixel: u64) -> u64 {
+    mix(mix(mix(0x9e37_79b9_7f4a_7c15 ^ frame) ^ pixel) ^ LIGHTS)
+}
+
+/// The digital shift (sx, sy) of light `index` (its place in the file's `lights:`, every kind
+/// counted) for a pixel whose light state is `seed`: the high and low 32 bits of
+/// mix(seed ⊕ index).
+#[inline]
+pub fn light_shift(seed: u64, index: usize) -> (u32, u32) {
+    let h = mix(seed ^ index as u64);
+    ((h >> 32) as u32, h as u32)
+}
+
+/// Point `g` of the (0,2)-sequence in base 2, as 32-bit fractions: the van der Corput radical
+/// inverse (g's bits reversed) and Sobol's second dimension, the XOR of v_i over the set bits
+/// i of g with v_0 = 2^31, v_i = v_(i-1) ⊕ (v_(i-1) ≫ 1). Every aligned run of 2^k points
+/// puts one point in each of the 2^k elementary rectangles of every shape, and an XOR shift
+/// keeps that.
+#[inline]
+pub fn sobol02(g: u32) -> (u32, u32) {
+    let (mut y, mut v, mut bits) = (0u32, 1u32 << 31, g);
+    while bits != 0 {
+        if bits & 1 != 0 {
+            y ^= v;
+        }
+        bits >>= 1;
+        v ^= v >> 1;
+    }
+    (g.reverse_bits(), y)
+}
+
+/// 32 bits as a fraction in [0, 1): b·2^-32, exact.
+#[inline]
+pub fn unit32(b: u32) -> f64 {
+    f64::from(b) * (1.0 / 4_294_967_296.0)
+}
+
 /// Element `i` of a pseudo-random permutation of 0..l chosen by `p`: Kensler's hash
 /// ("Correlated Multi-Jittered Sampling", Pixar 2013, as pbrt-v4's `PermutationElement`), a
 /// bijection on the smallest power of two ≥ l walked until it lands below l; the final
@@ -240,6 +283,35 @@ mod tests {
             assert!(!cells[cell], "two samples in cell {cell}");
             cells[cell] = true;
         }
+    }
+
+    /// Every aligned run of 2^k points of the shifted (0,2)-sequence has one point in each
+    /// elementary rectangle of area 2^-k, of every shape.
+    #[test]
+    fn light_points_are_a_shifted_0_2_sequence() {
+        let (sx, sy) = light_shift(light_seed(7, 1234), 3);
+        for k in 0..=10u32 {
+            for start in [0u32, 1 << k, 5 << k] {
+                for bits_x in 0..=k {
+                    let bits_y = k - bits_x;
+                    let mut seen = vec![false; 1 << k];
+                    for g in start..start + (1 << k) {
+                        let (x, y) = sobol02(g);
+                        let (x, y) = (x ^ sx, y ^ sy);
+                        let cx = if bits_x == 0 { 0 } else { x >> (32 - bits_x) };
+                        let cy = if bits_y == 0 { 0 } else { y >> (32 - bits_y) };
+                        let cell = (cx << bits_y | cy) as usize;
+                        assert!(!seen[cell], "k {k} start {start} shape {bits_x}");
+                        seen[cell] = true;
+                    }
+                }
+            }
+        }
+        assert_eq!(sobol02(0), (0, 0));
+        assert_eq!(sobol02(1), (1 << 31, 1 << 31));
+        assert_eq!(sobol02(2), (1 << 30, 0xc000_0000));
+        assert_eq!(sobol02(3), (0xc000_0000, 0x4000_0000));
+        assert_eq!(unit32(u32::MAX), 1.0 - 1.0 / 4_294_967_296.0);
     }
 
     #[test]

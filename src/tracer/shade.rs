@@ -12,7 +12,7 @@ use super::intersect::Ray;
 use super::polygon::MeshLanes;
 use super::texture::{self, At, Cone};
 use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
-use crate::scene::{Light, Material, Shape};
+use crate::scene::{Intensity, Light, Material, Shape};
 use glam::DVec3;
 
 /// Below this weight a reflection cannot change any output value (f32 colours, half-float
@@ -34,6 +34,18 @@ pub struct Eye<'a, V: Lanes> {
     pub transparent: bool,
     /// The eye rays' footprint spread (radians) when the scene has textures (`texture::Cone`).
     pub footprint: Option<f64>,
+    /// Which points each lane takes on area lights: set only when the scene has some (None
+    /// stands for pixel 0 of frame 0, sample 0, in every lane).
+    pub lights: Option<LightSeeds<'a>>,
+}
+
+/// Each lane's pixel light state (`sample::light_seed`) and the index k of the eye sample the
+/// packet traces: area lights take points k·m … k·m + m − 1 of each lane's sequence. Every
+/// surface of the sample's path or tree uses them.
+#[derive(Clone, Copy)]
+pub struct LightSeeds<'a> {
+    pub seeds: &'a [u64; MAX_LANES],
+    pub k: u32,
 }
 
 /// Follows one eye ray through at most `max_depth` surfaces; returns its colour (the one-lane
@@ -49,6 +61,7 @@ pub fn trace(world: &World, eye: Ray, max_depth: u32) -> DVec3 {
         from_origin: None,
         transparent: false,
         footprint: world.textured.then_some(0.0),
+        lights: None,
     };
     trace_packet(world, &eye, max_depth, &mut 0).0.lane(0)
 }
@@ -99,7 +112,7 @@ pub fn trace_packet<V: Lanes>(
             Some(c) => Some(c.at(hit.t)),
             None => None,
         };
-        let at = shade_hit(world, &ray, &hit, rays, width);
+        let at = shade_hit(world, &ray, &hit, eye.lights, rays, width);
         color = V3::select(active, color + at.local * weight, color);
         weight = weight * at.surface.reflection;
         active = active.andnot(weight.lt(V::splat(NEGLIGIBLE_WEIGHT)));
@@ -151,6 +164,7 @@ pub(super) fn shade_hit<'a, V: Lanes>(
     world: &'a World,
     ray: &Rays<V>,
     hit: &Nearest<V>,
+    seeds: Option<LightSeeds>,
     rays: &mut u64,
     footprint: Option<V>,
 ) -> Shaded<'a, V> {
@@ -188,8 +202,14 @@ pub(super) fn shade_hit<'a, V: Lanes>(
         if !lanes.any() {
             continue;
         }
-        let l = at.as_ref().or(lift.as_ref());
-        *out = local(world, &surface, p, n, view, hit.object, lanes, l, rays);
+        let here = Here {
+            point: p,
+            normal: n,
+            dir: view,
+            object: hit.object,
+            lift: at.as_ref().or(lift.as_ref()),
+        };
+        *out = local(world, &surface, &here, lanes, seeds, rays);
     }
     let local = match &mesh {
         Some(m) if stations > 1 => m.mixed(&lit),
@@ -379,23 +399,29 @@ fn anchor(shape: Shape) -> (DVec3, DVec3, bool) {
     }
 }
 
-/// Sum over the lights of the Blinn-Phong terms at one surface point per lane; shadow rays
-/// start at `point`, or lifted off a mesh by `lift`.
-#[allow(clippy::too_many_arguments)]
+/// A surface point per lane, as lights see it: `dir` is the incoming ray's direction, and
+/// shadow rays start at `point`, or lifted off a mesh by `lift`, leaving `object`.
+pub(super) struct Here<'l, V: Lanes> {
+    pub point: V3<V>,
+    pub normal: V3<V>,
+    pub dir: V3<V>,
+    pub object: V,
+    pub lift: Option<&'l Lift<V>>,
+}
+
+/// Sum over the lights of the Blinn-Phong terms at one surface point per lane.
 #[inline(always)]
 pub(super) fn local<V: Lanes>(
     world: &World,
     s: &Surface<V>,
-    point: V3<V>,
-    normal: V3<V>,
-    dir: V3<V>,
-    object: V,
+    at: &Here<V>,
     active: V::M,
-    lift: Option<&Lift<V>>,
+    seeds: Option<LightSeeds>,
     rays: &mut u64,
 ) -> V3<V> {
+    let point = at.point;
     let mut sum = V3::zero();
-    for light in &world.scene.lights {
+    for (index, light) in world.scene.lights.iter().enumerate() {
         let (to_light, distance, scale, i) = match *light {
             Light::Ambient { color } => {
                 sum = sum + s.ambient * V3::splat(color);
@@ -428,6 +454,13 @@ pub(super) fn local<V: Lanes>(
                 let falloff = smoothstep(cos_outer, cos_inner, -l.dot(V3::splat(axis)));
                 (l, d, Some(falloff), intensity)
             }
+            Light::Sphere { intensity, .. } | Light::Rect { intensity, .. } => {
+                // The ambient term once, then the light's points.
+                let ambient = s.ambient * V3::splat(intensity.ambient);
+                sum = V3::select(active, sum + ambient, sum);
+                super::area::light(world, s, at, (light, index), active, seeds, &mut sum, rays);
+                continue;
+            }
         };
         let lit_at_all = match scale {
             Some(f) => active.andnot(f.eq(V::splat(0.0))),
@@ -435,34 +468,63 @@ pub(super) fn local<V: Lanes>(
         };
         let ambient = scaled(scale, s.ambient) * V3::splat(i.ambient);
         sum = V3::select(lit_at_all, sum + ambient, sum);
-        let n_dot_l = normal.dot(to_light);
-        // Diffuse and specular vanish when N·L ≤ 0: a shadow ray is only worth tracing
-        // otherwise (NaN, which never compares ≤, is traced like the scalar code did).
-        let facing = lit_at_all.andnot(n_dot_l.le(V::splat(0.0)));
-        if !facing.any() {
-            continue;
-        }
-        *rays += facing.count();
-        let towards = to_light.normalize();
-        let shadow = Rays {
-            origin: match lift {
-                None => point,
-                Some(l) => l.origin(point, towards),
-            },
-            dir: towards,
-            leaving: object,
-        };
-        let open = facing.andnot(world.blockers().occluded(&shadow, distance, facing));
-        if open.any() {
-            let mut term = direct(s, &i, normal, to_light, n_dot_l, dir);
-            if !world.clear.is_empty() {
-                term = term * super::glass::transmittance(world, &shadow, distance, open);
-            }
-            let term = scaled(scale, term);
-            sum = V3::select(open, sum + term, sum);
-        }
+        shine(
+            world,
+            s,
+            at,
+            lit_at_all,
+            (to_light, distance),
+            &i,
+            scale,
+            &mut sum,
+            rays,
+        );
     }
     sum
+}
+
+/// Adds to `sum`, on the lanes of `lit` that face it (N·L > 0, or NaN) and see it past every
+/// opaque object, the diffuse and specular light coming from `to_light` (a unit vector, or 0)
+/// from `distance` away, filtered by glass on the way and scaled by `scale`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(super) fn shine<V: Lanes>(
+    world: &World,
+    s: &Surface<V>,
+    at: &Here<V>,
+    lit: V::M,
+    (to_light, distance): (V3<V>, V),
+    i: &Intensity,
+    scale: Option<V>,
+    sum: &mut V3<V>,
+    rays: &mut u64,
+) {
+    let n_dot_l = at.normal.dot(to_light);
+    // Diffuse and specular vanish when N·L ≤ 0: a shadow ray is only worth tracing
+    // otherwise (NaN, which never compares ≤, is traced like the scalar code did).
+    let facing = lit.andnot(n_dot_l.le(V::splat(0.0)));
+    if !facing.any() {
+        return;
+    }
+    *rays += facing.count();
+    let towards = to_light.normalize();
+    let shadow = Rays {
+        origin: match at.lift {
+            None => at.point,
+            Some(l) => l.origin(at.point, towards),
+        },
+        dir: towards,
+        leaving: at.object,
+    };
+    let open = facing.andnot(world.blockers().occluded(&shadow, distance, facing));
+    if open.any() {
+        let mut term = direct(s, i, at.normal, to_light, n_dot_l, at.dir);
+        if !world.clear.is_empty() {
+            term = term * super::glass::transmittance(world, &shadow, distance, open);
+        }
+        let term = scaled(scale, term);
+        *sum = V3::select(open, *sum + term, *sum);
+    }
 }
 
 /// A spot's falloff scales every term; point and directional lights have scale 1, and
@@ -479,7 +541,7 @@ fn scaled<V: Lanes>(scale: Option<V>, v: V3<V>) -> V3<V> {
 #[inline(always)]
 fn direct<V: Lanes>(
     s: &Surface<V>,
-    i: &crate::scene::Intensity,
+    i: &Intensity,
     n: V3<V>,
     l: V3<V>,
     n_dot_l: V,
@@ -534,7 +596,7 @@ pub fn powi<V: Lanes>(x: V, e: u32) -> V {
 
 /// Unit vector from `from` to `to`, and the distance (zero vector and 0 when they coincide).
 #[inline(always)]
-fn towards<V: Lanes>(from: V3<V>, to: V3<V>) -> (V3<V>, V) {
+pub(super) fn towards<V: Lanes>(from: V3<V>, to: V3<V>) -> (V3<V>, V) {
     let v = to - from;
     let d = v.length();
     let apart = d.gt(V::splat(0.0));
