@@ -8,7 +8,7 @@ use rayreel::scene::Shape;
 use rayreel::sequence;
 use rayreel::tracer::World;
 use rayreel::tracer::intersect::{Ray, intersect};
-use rayreel::tracer::shade::trace;
+use rayreel::tracer::path::trace;
 use std::hint::black_box;
 use std::path::Path;
 

@@ -19,7 +19,7 @@ use rayreel::schedule::render_frame;
 use rayreel::sequence::{self, Sequence};
 use rayreel::timeline::{Keyed, Path as TimelinePath};
 use rayreel::tracer::intersect::{Ray, intersect, nearest};
-use rayreel::tracer::shade::trace;
+use rayreel::tracer::path::trace;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

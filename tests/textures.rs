@@ -10,7 +10,7 @@ use rayreel::scene::Texture;
 use rayreel::sequence::{self, Sequence};
 use rayreel::shutter::Exposure;
 use rayreel::tracer::intersect::Ray;
-use rayreel::tracer::{self, World, shade};
+use rayreel::tracer::{self, World, path};
 use std::path::Path;
 
 /// A 2×2 RGB PNG, 8 bits, texels row by row from the top.
@@ -67,7 +67,7 @@ fn ray_colour(seq: &Sequence, origin: DVec3, towards: DVec3) -> DVec3 {
         dir: (towards - origin).normalize(),
         leaving: None,
     };
-    shade::trace(&world, ray, 1)
+    path::trace(&world, ray, 1)
 }
 
 fn close(a: DVec3, b: DVec3, what: &str) {

@@ -6,7 +6,8 @@
 //! they do not depend on the packet (see docs/spec/tracer.md, "Area lights").
 
 use super::World;
-use super::shade::{Here, LightSeeds, Surface, shine, towards};
+use super::path::LightSeeds;
+use super::shade::{Here, Surface, shine, towards};
 use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
 use crate::scene::Light;
 use glam::DVec3;

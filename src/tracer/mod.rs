@@ -12,6 +12,7 @@ pub mod glass;
 pub mod intersect;
 pub mod kernel;
 mod mesh;
+pub mod path;
 mod polygon;
 pub mod precision;
 mod rows;

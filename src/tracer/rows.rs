@@ -6,8 +6,8 @@
 
 use super::accel::{FromOrigin, Rays};
 use super::intersect::Ray;
+use super::path::{self, Eye, LightSeeds};
 use super::sample::{self, Dims, Pattern, Seed};
-use super::shade::{self, Eye, LightSeeds};
 use super::{Sampler, Samples, Settings, World, finite};
 use crate::camera::{Camera, screen_points};
 use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
@@ -273,7 +273,7 @@ fn packet<V: Lanes>(
                 lights,
             },
         };
-        let (c, covered) = shade::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays);
+        let (c, covered) = path::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays);
         sum = sum + c;
         if s.alpha {
             cover = cover + V::select(covered, one, zero);
@@ -545,7 +545,7 @@ pub(super) fn rays<V: Lanes>(
             footprint: world.textured.then_some(0.0),
             lights: None,
         };
-        let (c, _) = shade::trace_packet(world, &eye, max_depth, &mut cast);
+        let (c, _) = path::trace_packet(world, &eye, max_depth, &mut cast);
         for (k, o) in out.iter_mut().enumerate() {
             *o = c.lane(k);
         }

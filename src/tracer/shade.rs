@@ -3,15 +3,15 @@
 //!
 //! At a hit with normal N facing the incoming ray d, for each light: ka∘ia always; if the light
 //! is not blocked, kd∘id·max(0, N·L) and, when N·L > 0, ks∘is·max(0, N·H)^(shininess/4) with
-//! H = normalize(L − d). A path sums i0 + r0·i1 + r0·r1·i2 + … over at most `max_depth` surfaces.
-//! Each lane performs exactly the operations, in exactly the order, of one scalar ray.
+//! H = normalize(L − d); `path` sums what the surfaces of a path send back. Each lane performs
+//! exactly the operations, in exactly the order, of one scalar ray.
 
 use super::World;
-use super::accel::{FromOrigin, Nearest, Rays};
-use super::intersect::Ray;
+use super::accel::{Nearest, Rays};
+use super::path::LightSeeds;
 use super::polygon::MeshLanes;
-use super::texture::{self, At, Cone};
-use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
+use super::texture::{self, At};
+use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{Intensity, Light, Material, Shape};
 use glam::DVec3;
 
@@ -22,111 +22,6 @@ pub(super) const NEGLIGIBLE_WEIGHT: f64 = 1e-30;
 /// Exponents up to this are whole-number powers by repeated squaring; larger or fractional
 /// ones go through `libm::pow`.
 const MAX_WHOLE_EXPONENT: f64 = 4096.0;
-
-/// A packet of eye rays: `active` lanes carry a ray; `from_origin` is set when they all start
-/// at one point (a pinhole camera), so per-sphere constants are computed once a frame.
-pub struct Eye<'a, V: Lanes> {
-    pub rays: Rays<V>,
-    pub active: V::M,
-    pub from_origin: Option<&'a [FromOrigin]>,
-    /// Eye rays that miss add nothing (a transparent background, for alpha); reflection rays
-    /// that miss still see the background.
-    pub transparent: bool,
-    /// The eye rays' footprint spread (radians) when the scene has textures (`texture::Cone`).
-    pub footprint: Option<f64>,
-    /// Which points each lane takes on area lights: set only when the scene has some (None
-    /// stands for pixel 0 of frame 0, sample 0, in every lane).
-    pub lights: Option<LightSeeds<'a>>,
-}
-
-/// Each lane's pixel light state (`sample::light_seed`) and the index k of the eye sample the
-/// packet traces: area lights take points k·m … k·m + m − 1 of each lane's sequence. Every
-/// surface of the sample's path or tree uses them.
-#[derive(Clone, Copy)]
-pub struct LightSeeds<'a> {
-    pub seeds: &'a [u64; MAX_LANES],
-    pub k: u32,
-}
-
-/// Follows one eye ray through at most `max_depth` surfaces; returns its colour (the one-lane
-/// packet, for tests and tools).
-pub fn trace(world: &World, eye: Ray, max_depth: u32) -> DVec3 {
-    let eye = Eye {
-        rays: Rays {
-            origin: V3::<F64x1>::splat(eye.origin),
-            dir: V3::splat(eye.dir),
-            leaving: F64x1(eye.leaving.map_or(-1.0, |o| o as f64)),
-        },
-        active: true,
-        from_origin: None,
-        transparent: false,
-        footprint: world.textured.then_some(0.0),
-        lights: None,
-    };
-    trace_packet(world, &eye, max_depth, &mut 0).0.lane(0)
-}
-
-/// Follows each lane's eye ray through at most `max_depth` surfaces; returns its colour and
-/// the lanes whose eye ray hit something, and adds the rays cast (eye, reflection and shadow
-/// rays) to `rays`.
-#[inline(always)]
-pub fn trace_packet<V: Lanes>(
-    world: &World,
-    eye: &Eye<V>,
-    max_depth: u32,
-    rays: &mut u64,
-) -> (V3<V>, V::M) {
-    if world.branches {
-        return super::glass::trace_tree(world, eye, max_depth, rays);
-    }
-    let background = V3::splat(world.scene.background);
-    let mut ray = eye.rays;
-    let mut active = eye.active;
-    let mut color = V3::zero();
-    let mut weight = V::splat(1.0);
-    let mut covered = V::M::none_set();
-    // `match`, not `Option::map`: a closure is compiled outside the kernel's
-    // `#[target_feature]` function, and lane operations must stay in it.
-    #[allow(clippy::manual_map)]
-    let mut cone = match eye.footprint {
-        Some(spread) => Some(Cone::<V>::eye(spread)),
-        None => None,
-    };
-    for depth in 0..max_depth {
-        *rays += active.count();
-        let from_origin = if depth == 0 { eye.from_origin } else { None };
-        let hit = world.geometry.nearest(&ray, from_origin, active);
-        let missed = active.andnot(hit.hit);
-        if missed.any() && !(depth == 0 && eye.transparent) {
-            color = V3::select(missed, color + background * weight, color);
-        }
-        active = hit.hit;
-        if depth == 0 {
-            covered = hit.hit;
-        }
-        if !active.any() {
-            break;
-        }
-        #[allow(clippy::manual_map)]
-        let width = match &cone {
-            Some(c) => Some(c.at(hit.t)),
-            None => None,
-        };
-        let at = shade_hit(world, &ray, &hit, eye.lights, rays, width);
-        color = V3::select(active, color + at.local * weight, color);
-        weight = weight * at.surface.reflection;
-        active = active.andnot(weight.lt(V::splat(NEGLIGIBLE_WEIGHT)));
-        if !active.any() || depth + 1 == max_depth {
-            break;
-        }
-        ray = at.reflected(&ray, &hit);
-        if let Some(c) = &cone {
-            let bend = texture::curvature(world, hit.object);
-            cone = Some(c.leaving(hit.t, bend, at.entering));
-        }
-    }
-    (color, covered)
-}
 
 /// How far, and along which normal, rays leaving a mesh start off its surface (see
 /// `polygon::lift_distance`): `normal` faces the incoming ray, `delta` is 0 on other lanes.
@@ -619,6 +514,7 @@ fn smoothstep<V: Lanes>(edge0: f64, edge1: f64, x: V) -> V {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lanes::F64x1;
 
     #[test]
     fn powi_multiplies_in_binary_order() {
