@@ -350,3 +350,35 @@ fn share_off_by_more_than_two_levels() {
     let e = compare(&a, &b);
     assert_eq!((e.max, e.off, e.off2), (3, 0.5, 0.25));
 }
+
+/// With area lights, `measure` adds the light-sample trade (1, 4, 16 and 64 points per eye
+/// sample at the file's pixel sampling) next to the pixel-sample ladder; more light samples
+/// come closer to the reference.
+#[test]
+fn measure_shows_light_samples_beside_pixel_samples() {
+    let tmp = scratch("measure_lights");
+    let out = run_in(
+        &tmp,
+        &[
+            "measure",
+            repo().join("sequences/soft-shadows.yaml").to_str().unwrap(),
+            "--size",
+            "48x27",
+            "--runs",
+            "1",
+            "--out",
+            "m",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let csv = std::fs::read_to_string(tmp.join("m/measure.csv")).unwrap();
+    let rmse: Vec<f64> = csv
+        .lines()
+        .filter(|l| l.starts_with("lights,"))
+        .map(|l| l.split(',').nth(8).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(rmse.len(), 4, "{csv}");
+    assert!(rmse[3] < rmse[0], "{csv}");
+    let svg = std::fs::read_to_string(tmp.join("m/measure.svg")).unwrap();
+    assert!(svg.contains("#ff7f0e"), "the lights line");
+}

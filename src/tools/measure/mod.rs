@@ -6,6 +6,7 @@
 //! the f64 image (the reference itself is always f64).
 
 use crate::frame::Frame;
+use crate::scene::Light;
 use crate::schedule::{RunError, render_with};
 use crate::sequence::{Quality, Sequence, preset};
 use crate::tracer::{Adaptive, Precision, Sampler, Settings, World};
@@ -278,6 +279,44 @@ pub(crate) struct Report {
     pub(crate) rows: Vec<Row>,
 }
 
+/// Light samples per eye sample, the trade next to pixel samples: with area lights, the file's
+/// settings with every area light at 1, 4, 16 and 64 samples (nothing without them).
+fn light_rows(
+    seq: &Sequence,
+    n: u64,
+    runs: usize,
+    reference: &[u8],
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<Row>, RunError> {
+    let mut rows = Vec::new();
+    if !seq.scene.lights.iter().any(|l| l.area_samples().is_some()) {
+        return Ok(rows);
+    }
+    for m in [1, 4, 16, 64] {
+        let mut seq = seq.clone();
+        for l in &mut seq.scene.lights {
+            if let Light::Sphere { samples, .. } | Light::Rect { samples, .. } = l {
+                *samples = m;
+            }
+        }
+        let world = World::new(seq.scene.clone());
+        let (image, spp, times) = timed(&world, &seq, n, &seq.settings, false, runs)?;
+        let error = compare(&image, reference);
+        let label = format!("{m} light samples");
+        progress(&format!("{label}: rmse {:.3}", error.rmse));
+        rows.push(Row {
+            group: "lights",
+            label,
+            settings: seq.settings,
+            samples_per_pixel: spp,
+            seconds: spread(times),
+            error,
+            versus_f64: None,
+        });
+    }
+    Ok(rows)
+}
+
 /// Renders the reference and the ladder; `progress` hears each rung as it finishes.
 pub(crate) fn measure(
     seq: &Sequence,
@@ -313,6 +352,9 @@ pub(crate) fn measure(
             error,
             versus_f64: None,
         });
+    }
+    for row in light_rows(seq, n, runs, &ref_image, progress)? {
+        rows.push(row);
     }
     for row in precision_rows(&world, seq, n, runs, &ref_image)? {
         let e = row.versus_f64.expect("a precision row").error;

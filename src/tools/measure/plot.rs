@@ -35,6 +35,7 @@ impl Report {
             ("uniform", "#1f77b4"),
             ("adaptive", "#2ca02c"),
             ("depth", "#9467bd"),
+            ("lights", "#ff7f0e"),
         ] {
             let line: Vec<String> = self
                 .rows
@@ -45,6 +46,9 @@ impl Report {
                     format!("{:.1},{:.1}", a.px(x), a.py(y))
                 })
                 .collect();
+            if line.is_empty() {
+                continue;
+            }
             let _ = writeln!(
                 s,
                 "<polyline points=\"{}\" fill=\"none\" stroke=\"{color}\" stroke-width=\"1.5\"/>",
