@@ -28,6 +28,12 @@ pub(crate) use vec3::V3;
 /// per-lane arrays around the kernels.
 pub const MAX_LANES: usize = 32;
 
+/// `Lanes::outlined` for types that need no CPU feature.
+#[inline(never)]
+fn outlined<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}
+
 /// A set of lanes, the result of a comparison.
 pub trait Mask: Copy {
     fn none_set() -> Self;
@@ -105,6 +111,16 @@ pub trait Lanes:
     #[inline(always)]
     fn lane(self, k: usize) -> f64 {
         self.array()[k]
+    }
+    /// Calls `f` out of line, in a function compiled for this type's CPU feature. The kernels
+    /// call their large stages (a BVH walk, shading a hit, a path) through this, so that each
+    /// is compiled once per lane type instead of once per call site: inlined everywhere, they
+    /// made a release build take 20 minutes. Pass an `#[inline(always)]` closure so its body is
+    /// compiled with the feature (`tests/kernels.rs` checks the binary for lane operations
+    /// left out of line).
+    #[inline(always)]
+    fn outlined<R>(f: impl FnOnce() -> R) -> R {
+        outlined(f)
     }
     /// Lanes from a function of the lane index.
     #[inline(always)]
@@ -251,6 +267,10 @@ impl<L: Lanes> Lanes for Pair<L> {
     #[inline(always)]
     fn max(self, o: Self) -> Self {
         Pair(self.0.max(o.0), self.1.max(o.1))
+    }
+    #[inline(always)]
+    fn outlined<R>(f: impl FnOnce() -> R) -> R {
+        L::outlined(f)
     }
 }
 

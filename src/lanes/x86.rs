@@ -28,6 +28,7 @@ macro_rules! x86_lanes {
         $(#[$doc:meta])*
         $t:ident($reg:ty): $n:literal lanes, one $one:ident, tiny $tiny:expr, slack $slack:expr;
         safety: $safety:literal;
+        outlined $outlined:ident;
         mask $m:ident $(($mreg:ty) {
             none: $none:ident, lanes: $int:ty, from_lanes: $from:ident($load:ident),
             and: $mand:ident, or: $mor:ident, andnot: $mandnot:ident, bits: $movemask:ident
@@ -196,6 +197,12 @@ macro_rules! x86_lanes {
                 // SAFETY: the `safety` argument of this expansion.
                 unsafe { $t($max(self.0, o.0)) }
             }
+            #[inline(always)]
+            fn outlined<R>(f: impl FnOnce() -> R) -> R {
+                // SAFETY: the `safety` argument of this expansion; `$outlined` enables no
+                // feature beyond this type's.
+                unsafe { $outlined(f) }
+            }
         }
     };
     (@op $t:ident, $trait:ident, $f:ident, $intrinsic:ident) => {
@@ -210,11 +217,32 @@ macro_rules! x86_lanes {
     };
 }
 
+/// `Lanes::outlined` for the AVX types.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[target_feature(enable = "avx2")]
+#[inline(never)]
+unsafe fn avx2<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}
+
+/// `Lanes::outlined` for the AVX-512 types.
+///
+/// # Safety
+/// The CPU must have AVX-512F.
+#[target_feature(enable = "avx512f")]
+#[inline(never)]
+unsafe fn avx512<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}
+
 x86_lanes! {
     /// 4 × f64 in an AVX register.
     F64x4(__m256d): 4 lanes, one F64x1, tiny 1e-300, slack 0.0;
     safety: "AVX instructions; only named by `Kernel::run` for `Kernel::Avx2`, inside its \
         `avx2` entry point, after `Kernel::supported` detected AVX2 (which implies AVX).";
+    outlined avx2;
     mask M4(__m256d) {
         none: _mm256_setzero_pd, lanes: i64, from_lanes: _mm256_castsi256_pd(_mm256_loadu_si256),
         and: _mm256_and_pd, or: _mm256_or_pd, andnot: _mm256_andnot_pd, bits: _mm256_movemask_pd
@@ -239,6 +267,7 @@ x86_lanes! {
     F32x8(__m256): 8 lanes, one F32x1, tiny 1e-30, slack 1.0 / 65536.0;
     safety: "AVX instructions; only named by `Kernel::run` for `Kernel::Avx2`, inside its \
         `avx2` entry point, after `Kernel::supported` detected AVX2 (which implies AVX).";
+    outlined avx2;
     mask M8(__m256) {
         none: _mm256_setzero_ps, lanes: i32, from_lanes: _mm256_castsi256_ps(_mm256_loadu_si256),
         and: _mm256_and_ps, or: _mm256_or_ps, andnot: _mm256_andnot_ps, bits: _mm256_movemask_ps
@@ -268,6 +297,7 @@ x86_lanes! {
     F64x8(__m512d): 8 lanes, one F64x1, tiny 1e-300, slack 0.0;
     safety: "AVX-512F instructions; only named by `Kernel::run` for `Kernel::Avx512`, inside \
         its `avx512` entry point, after `Kernel::supported` detected AVX-512F.";
+    outlined avx512;
     mask u8;
     add _mm512_add_pd, sub _mm512_sub_pd, mul _mm512_mul_pd, div _mm512_div_pd,
     sqrt _mm512_sqrt_pd, min _mm512_min_pd, max _mm512_max_pd;
@@ -294,6 +324,7 @@ x86_lanes! {
     F32x16(__m512): 16 lanes, one F32x1, tiny 1e-30, slack 1.0 / 65536.0;
     safety: "AVX-512F instructions; only named by `Kernel::run` for `Kernel::Avx512`, inside \
         its `avx512` entry point, after `Kernel::supported` detected AVX-512F.";
+    outlined avx512;
     mask u16;
     add _mm512_add_ps, sub _mm512_sub_ps, mul _mm512_mul_ps, div _mm512_div_ps,
     sqrt _mm512_sqrt_ps, min _mm512_min_ps, max _mm512_max_ps;

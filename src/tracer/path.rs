@@ -65,6 +65,14 @@ pub fn trace_packet<V: Lanes>(
     max_depth: u32,
     rays: &mut u64,
 ) -> (V3<V>, V::M) {
+    V::outlined(
+        #[inline(always)]
+        || follow(world, eye, max_depth, rays),
+    )
+}
+
+#[inline(always)]
+fn follow<V: Lanes>(world: &World, eye: &Eye<V>, max_depth: u32, rays: &mut u64) -> (V3<V>, V::M) {
     if world.branches {
         return super::glass::trace_tree(world, eye, max_depth, rays);
     }

@@ -230,6 +230,19 @@ impl Geometry {
         eye: Option<&[FromOrigin]>,
         active: V::M,
     ) -> Nearest<V> {
+        V::outlined(
+            #[inline(always)]
+            || self.find_nearest(rays, eye, active),
+        )
+    }
+
+    #[inline(always)]
+    fn find_nearest<V: Lanes>(
+        &self,
+        rays: &Rays<V>,
+        eye: Option<&[FromOrigin]>,
+        active: V::M,
+    ) -> Nearest<V> {
         let mut search = NearestSearch {
             geometry: self,
             rays,
@@ -293,6 +306,14 @@ impl Geometry {
     /// The `active` lanes with something on their ray strictly before `max_t`.
     #[inline(always)]
     pub fn occluded<V: Lanes>(&self, rays: &Rays<V>, max_t: V, active: V::M) -> V::M {
+        V::outlined(
+            #[inline(always)]
+            || self.find_blocked(rays, max_t, active),
+        )
+    }
+
+    #[inline(always)]
+    fn find_blocked<V: Lanes>(&self, rays: &Rays<V>, max_t: V, active: V::M) -> V::M {
         let mut blocked = V::M::none_set();
         for p in &self.planes {
             let (hit, t) = plane(p, rays, active.andnot(blocked));
