@@ -286,6 +286,11 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Whether any material lets light through (glass), so paths need depth to show it.
+    pub fn has_glass(&self) -> bool {
+        self.materials.iter().any(Material::transparent)
+    }
+
     /// The world box of a placed mesh: its file's box with the eight corners placed.
     pub fn mesh_bounds(&self, mesh: usize, place: &Placement) -> (DVec3, DVec3) {
         let (lo, hi) = self.meshes[mesh].bounds();

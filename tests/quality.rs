@@ -214,15 +214,16 @@ fn the_reference_is_f64_whatever_the_file_says() {
 
 #[test]
 fn draft_halves_the_size_unless_a_size_is_given() {
+    // orbit.yaml sets `max_depth: 3` itself, which no preset replaces.
     let s = job(&["--quality", "draft"]).settings;
     assert_eq!(
         (s.width, s.height, s.samples, s.max_depth),
-        (640, 360, 1, 2)
+        (640, 360, 1, 3)
     );
     let s = job(&["--quality", "draft", "--size", "100x50", "--max-depth", "4"]).settings;
     assert_eq!((s.width, s.height, s.max_depth), (100, 50, 4));
     let s = job(&["--quality", "final", "--samples", "9"]).settings;
-    assert_eq!((s.samples, s.adaptive, s.max_depth), (9, None, 5));
+    assert_eq!((s.samples, s.adaptive, s.max_depth), (9, None, 3));
 }
 
 #[test]
@@ -381,4 +382,62 @@ fn measure_shows_light_samples_beside_pixel_samples() {
     assert!(rmse[3] < rmse[0], "{csv}");
     let svg = std::fs::read_to_string(tmp.join("m/measure.svg")).unwrap();
     assert!(svg.contains("#ff7f0e"), "the lights line");
+}
+
+/// `render --dry-run`'s effective settings line for `yaml` with `args`.
+fn dry_settings(tmp: &std::path::Path, yaml: &str, args: &[&str]) -> String {
+    let file = tmp.join("s.yaml");
+    std::fs::write(&file, yaml).unwrap();
+    let mut line = vec![
+        "render",
+        file.to_str().unwrap(),
+        "--dry-run",
+        "-o",
+        "f_####.png",
+    ];
+    line.extend_from_slice(args);
+    let out = run_in(tmp, &line);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let settings = text.lines().find(|l| l.starts_with("settings: "));
+    settings
+        .unwrap_or_else(|| panic!("no settings line in {text}"))
+        .to_string()
+}
+
+#[test]
+fn presets_never_replace_what_the_file_sets() {
+    let tmp = scratch("preset_word");
+    let scene = "camera: { position: [0, 1, 5], look_at: [0, 0, 0] }\n\
+        materials: { m: { diffuse: [0.8, 0.2, 0.2] } }\n\
+        objects: [ { sphere: { center: [0, 0, 0], radius: 1, material: m } } ]\n";
+    // The file's depth and sampling survive `--quality`; what it leaves unset, the preset fills.
+    let own = format!("render: {{ width: 64, height: 36, max_depth: 6, samples: 16 }}\n{scene}");
+    // As with the file's own preset, its `samples` is the first pass of final's adaptivity.
+    let s = dry_settings(&tmp, &own, &["--quality", "final"]);
+    assert!(s.contains("max_depth 6, 16 to 64 samples (adaptive"), "{s}");
+    let s = dry_settings(&tmp, &own, &["--quality", "draft"]);
+    assert!(
+        s.starts_with("settings: 32x18, max_depth 6, 16 samples"),
+        "{s}"
+    );
+    let unset = format!("render: {{ width: 64, height: 36 }}\n{scene}");
+    let s = dry_settings(&tmp, &unset, &["--quality", "final"]);
+    assert!(s.contains("max_depth 5, 4 to 64 samples (adaptive"), "{s}");
+    // Flags that set a value still win over the file.
+    let s = dry_settings(&tmp, &own, &["--quality", "final", "--max-depth", "2"]);
+    assert!(s.contains("max_depth 2"), "{s}");
+    // Draft keeps glass legible: in, out and what is behind it.
+    let glass = unset.replace(
+        "diffuse: [0.8, 0.2, 0.2]",
+        "diffuse: [0, 0, 0], transmission: [0.9, 0.9, 0.9], ior: 1.5",
+    );
+    let s = dry_settings(&tmp, &glass, &["--quality", "draft"]);
+    assert!(s.contains("max_depth 3, 1 sample"), "{s}");
+    let s = dry_settings(&tmp, &unset, &["--quality", "draft"]);
+    assert!(s.contains("max_depth 2, 1 sample"), "{s}");
+    // The same rule for the file's own preset.
+    let file_glass = glass.replace("height: 36 }", "height: 36, quality: draft }");
+    let s = dry_settings(&tmp, &file_glass, &[]);
+    assert!(s.contains("max_depth 3"), "{s}");
 }

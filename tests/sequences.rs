@@ -126,7 +126,15 @@ fn a_single_key_is_a_still_camera() {
 #[test]
 fn example_sequences_check_and_render_a_frame() {
     let tmp = scratch("examples");
-    for name in ["talk", "orbit", "flyby"] {
+    for name in [
+        "talk",
+        "orbit",
+        "flyby",
+        "checker",
+        "soft-shadows",
+        "glass",
+        "mesh",
+    ] {
         let file = repo().join(format!("sequences/{name}.yaml"));
         let out = run_in(&tmp, &["check", file.to_str().unwrap()]);
         assert!(out.status.success(), "{name}: {}", stderr(&out));

@@ -6,7 +6,7 @@
 use super::{BitDepth, JobArgs, RenderArgs, ShardSpec, resolve_shard};
 use crate::frameset::FrameSet;
 use crate::output::{FileFormat, Files};
-use crate::sequence::{self, LoadError, Quality, Sequence, output_pattern, preset};
+use crate::sequence::{self, LoadError, Quality, Sequence, output_pattern};
 
 /// Why the arguments make no job: the file is wrong, or the command line asks for something
 /// impossible (both exit 2).
@@ -109,10 +109,19 @@ impl Job {
     }
 }
 
-/// The command line's values replace the file's: a preset first, then the values it sets.
+/// The command line's values replace the file's. A preset fills only the sampling values the
+/// file left unset (it never replaces `render.samples`, `render.adaptive` or
+/// `render.max_depth`); the flags that set a value replace it.
 fn apply(seq: &mut Sequence, o: &JobArgs) -> Result<(), JobError> {
     if let Some(q) = o.quality {
-        preset(&mut seq.settings, q);
+        let glass = seq.scene.has_glass();
+        seq.explicit.preset(&mut seq.settings, q, glass);
+        // The preset's first pass may reach the file's own most samples: nothing is left
+        // to extend.
+        let s = &mut seq.settings;
+        if s.adaptive.is_some_and(|a| a.max_samples <= s.samples) {
+            s.adaptive = None;
+        }
     }
     let draft = o.quality.or(seq.quality) == Some(Quality::Draft);
     if draft && o.size.is_none() {

@@ -278,7 +278,7 @@ fn frames(t: &Timeline) -> String {
 }
 
 /// The `picture:` line: sampling, encoding, exposure and alpha, what decides how frames look.
-fn picture(s: &Settings) -> String {
+pub(super) fn picture(s: &Settings) -> String {
     let sampling = match s.adaptive {
         Some(a) => format!(
             "{} to {} samples (adaptive, threshold {})",

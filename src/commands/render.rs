@@ -285,7 +285,15 @@ fn print_dry_run(
     if let Some(w) = warning {
         crate::console::warning(&w);
     }
-    let text = format!("{text}cost: {cost}\n");
+    let s = &seq.settings;
+    let text = format!(
+        "{text}settings: {}x{}, max_depth {}, {}, {}\ncost: {cost}\n",
+        s.width,
+        s.height,
+        s.max_depth,
+        super::check::picture(s),
+        s.precision.name()
+    );
     if !piping {
         return out(&text);
     }

@@ -25,7 +25,7 @@ use settings::*;
 pub use guard::nesting_depth;
 pub(crate) use messages::{approx, num};
 pub use settings::{DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD};
-pub(crate) use settings::{MAX_SAMPLES, exposure, output_pattern, preset};
+pub(crate) use settings::{Explicit, MAX_SAMPLES, exposure, output_pattern, preset};
 pub(crate) use timeline::MAX_FIRST_FRAME;
 
 use crate::camera::{Camera, Degenerate, Pose};
@@ -82,6 +82,8 @@ pub struct Sequence {
     pub(crate) output: String,
     /// The file's `render.quality`, if any (draft also halves the resolution).
     pub quality: Option<Quality>,
+    /// The sampling values the file set itself, which no preset replaces.
+    pub(crate) explicit: Explicit,
     /// What is valid but probably not meant (keys after the end of the film), one line each.
     pub(crate) warnings: Vec<String>,
 }
@@ -244,8 +246,14 @@ pub(crate) fn parse_drawable(
 
 /// The sequence, and the first key or frame whose camera cannot be built (see `load_drawable`).
 fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Option<Invalid>)> {
-    let settings = render_settings(&raw.render)?;
+    let (mut settings, explicit) = render_settings(&raw.render)?;
     let (scene, mut warnings) = scene_of(&raw, base)?;
+    // `render_settings` applied the preset; glass may need it to reach deeper.
+    if let Some(q) = raw.render.quality
+        && scene.has_glass()
+    {
+        explicit.preset(&mut settings, q, true);
+    }
     let camera = raw.camera.as_ref().map(camera_key).transpose()?;
     let loaded = match (&raw.timeline, camera) {
         (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
@@ -263,6 +271,7 @@ fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Opt
         settings,
         output: output_of(raw.output, name, &timeline)?,
         quality: raw.render.quality,
+        explicit,
         timeline,
         warnings: {
             warnings.extend(loaded.warnings);

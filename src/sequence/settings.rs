@@ -4,7 +4,42 @@
 use super::*;
 use crate::pattern::{NAME_MAX, Pattern};
 
-pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
+/// The sampling values a file gives itself (`render.samples`, `render.adaptive`,
+/// `render.max_depth`), checked: a preset fills only what these leave unset, whether the
+/// preset comes from the file or from `--quality`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Explicit {
+    pub samples: Option<u32>,
+    pub adaptive: Option<Adaptive>,
+    pub max_depth: Option<u32>,
+}
+
+impl Explicit {
+    /// `q`'s values for what the file left unset; on a scene with glass (`glass`), at least
+    /// 3 surfaces (in, out, and what is behind) so `draft` still shows through it.
+    pub(crate) fn preset(&self, s: &mut Settings, q: Quality, glass: bool) {
+        preset(s, q);
+        if glass {
+            s.max_depth = s.max_depth.max(GLASS_DEPTH);
+        }
+        if let Some(d) = self.max_depth {
+            s.max_depth = d;
+        }
+        if let Some(n) = self.samples {
+            s.samples = n;
+        }
+        if self.adaptive.is_some() {
+            s.adaptive = self.adaptive;
+        }
+    }
+}
+
+/// The fewest surfaces a path through glass needs to show what is behind it (entering,
+/// leaving, the surface seen): a preset never sets less on a scene with glass.
+pub(crate) const GLASS_DEPTH: u32 = 3;
+
+/// The file's `render:` settings, and which sampling values it set itself.
+pub(super) fn render_settings(r: &raw::Render) -> Check<(Settings, Explicit)> {
     let check = |path: &str, r: Result<u32, String>| r.or_else(|m| invalid(path, m));
     let mut s = Settings {
         width: check("render.width", dimension(r.width.unwrap_or(1280)))?,
@@ -30,17 +65,29 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
         default_sampling(&mut s);
     }
     pixels(s.width, s.height).or_else(|m| invalid("render.width", m))?;
-    if let Some(q) = r.quality {
-        preset(&mut s, q);
-    }
-    if let Some(d) = r.max_depth {
-        s.max_depth = check("render.max_depth", max_depth(d))?;
-    }
-    if let Some(n) = r.samples {
-        s.samples = check("render.samples", samples(n))?;
-    }
-    if let Some(a) = &r.adaptive {
-        s.adaptive = Some(adaptive(a)?);
+    let explicit = Explicit {
+        max_depth: match r.max_depth {
+            Some(d) => Some(check("render.max_depth", max_depth(d))?),
+            None => None,
+        },
+        samples: match r.samples {
+            Some(n) => Some(check("render.samples", samples(n))?),
+            None => None,
+        },
+        adaptive: match &r.adaptive {
+            Some(a) => Some(adaptive(a)?),
+            None => None,
+        },
+    };
+    match r.quality {
+        Some(q) => explicit.preset(&mut s, q, false),
+        None => {
+            s.max_depth = explicit.max_depth.unwrap_or(s.max_depth);
+            s.samples = explicit.samples.unwrap_or(s.samples);
+            if explicit.adaptive.is_some() {
+                s.adaptive = explicit.adaptive;
+            }
+        }
     }
     if let Some(a) = s.adaptive
         && a.max_samples <= s.samples
@@ -54,7 +101,7 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<Settings> {
             ),
         );
     }
-    Ok(s)
+    Ok((s, explicit))
 }
 
 /// `render.adaptive`: its threshold in (0, 1] and its most samples, or their defaults.
