@@ -441,3 +441,30 @@ fn presets_never_replace_what_the_file_sets() {
     let s = dry_settings(&tmp, &file_glass, &[]);
     assert!(s.contains("max_depth 3"), "{s}");
 }
+
+#[test]
+fn check_warns_about_grain_where_the_film_blurs_with_few_samples() {
+    let check = |file: &std::path::Path| {
+        let out = run_in(&repo(), &["check", file.to_str().unwrap()]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        stderr(&out)
+    };
+    let flyby = check(&repo().join("sequences/flyby.yaml"));
+    assert!(
+        flyby.contains("frames 0 to 144 may look grainy")
+            && flyby.contains("the shutter smears up to")
+            && flyby.contains("the lens blurs up to")
+            && flyby.contains("--quality final"),
+        "{flyby}"
+    );
+    let talk = check(&repo().join("sequences/talk.yaml"));
+    assert!(!talk.contains("grainy"), "{talk}");
+    // Enough samples for a smooth blur: no warning.
+    let tmp = scratch("grain");
+    let text = std::fs::read_to_string(repo().join("sequences/flyby.yaml")).unwrap();
+    let smooth = text.replacen("render:\n", "render:\n  adaptive: { max_samples: 64 }\n", 1);
+    assert_ne!(smooth, text);
+    std::fs::write(tmp.join("smooth.yaml"), smooth).unwrap();
+    let out = check(&tmp.join("smooth.yaml"));
+    assert!(!out.contains("grainy"), "{out}");
+}

@@ -12,7 +12,7 @@ pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
     let seq = sequence::load(&args.file)?;
     print_warnings(&seq);
     let (cost, warning) = cost(&seq, seq.timeline.frame_count);
-    if let Some(w) = warning {
+    for w in warning.into_iter().chain(super::grain::warning(&seq)) {
         eprintln!("{w}");
     }
     out(&format!(

@@ -2,6 +2,7 @@
 
 mod camera;
 mod check;
+mod grain;
 mod meshes;
 mod render;
 mod tools;
