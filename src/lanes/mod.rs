@@ -113,8 +113,8 @@ pub trait Lanes:
         self.array()[k]
     }
     /// Calls `f` out of line, in a function compiled for this type's CPU feature. The kernels
-    /// call their large stages (a BVH walk, shading a hit, a path) through this, so that each
-    /// is compiled once per lane type instead of once per call site: inlined everywhere, they
+    /// call their large stages (a packet's path, a shadow walk) through this, so that each is
+    /// compiled once per lane type instead of once per call site: inlined everywhere, they
     /// made a release build take 20 minutes. Pass an `#[inline(always)]` closure so its body is
     /// compiled with the feature (`tests/kernels.rs` checks the binary for lane operations
     /// left out of line).

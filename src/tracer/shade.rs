@@ -63,21 +63,6 @@ pub(super) fn shade_hit<'a, V: Lanes>(
     rays: &mut u64,
     footprint: Option<V>,
 ) -> Shaded<'a, V> {
-    V::outlined(
-        #[inline(always)]
-        || shade(world, ray, hit, seeds, rays, footprint),
-    )
-}
-
-#[inline(always)]
-fn shade<'a, V: Lanes>(
-    world: &'a World,
-    ray: &Rays<V>,
-    hit: &Nearest<V>,
-    seeds: Option<LightSeeds>,
-    rays: &mut u64,
-    footprint: Option<V>,
-) -> Shaded<'a, V> {
     let mut surface = Surface::gather(world, hit);
     let point = ray.origin + ray.dir * hit.t;
     let (mut normal, mut entering) = surface.normal(point, ray.dir);

@@ -230,19 +230,6 @@ impl Geometry {
         eye: Option<&[FromOrigin]>,
         active: V::M,
     ) -> Nearest<V> {
-        V::outlined(
-            #[inline(always)]
-            || self.find_nearest(rays, eye, active),
-        )
-    }
-
-    #[inline(always)]
-    fn find_nearest<V: Lanes>(
-        &self,
-        rays: &Rays<V>,
-        eye: Option<&[FromOrigin]>,
-        active: V::M,
-    ) -> Nearest<V> {
         let mut search = NearestSearch {
             geometry: self,
             rays,
