@@ -15,12 +15,18 @@ use crate::signals;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// Makes the frames' directory and removes this job's temporaries that processes which are
-/// gone left there.
+/// Makes the frames' directory, checks that files can be written there (before anything
+/// renders), and removes this job's temporaries that processes which are gone left there.
 fn prepare(files: &Files, frames: &FrameSet) -> Result<(), Error> {
     let dir = plan::directory(&files.frame_path(0));
     std::fs::create_dir_all(&dir)
         .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
+    output::atomic::probe_writable(&dir).map_err(|e| {
+        Error::Failed(format!(
+            "{}: cannot write files in this directory: {e}",
+            dir.display()
+        ))
+    })?;
     output::atomic::clean_leftovers(&dir, &files.pattern, frames);
     Ok(())
 }
