@@ -1,5 +1,6 @@
 //! What users coming from Blender and from a shell trip over, through the real binary: an
-//! output directory that cannot take files is refused before anything renders.
+//! output directory that cannot take files is refused before anything renders; keys by frame
+//! number and as exact fractions of seconds.
 
 mod common;
 use common::*;
@@ -8,6 +9,18 @@ use std::path::Path;
 /// A file of the test scene at 32×18 with `timeline` (a YAML block), in `dir/NAME`.
 fn write(dir: &Path, name: &str, timeline: &str) {
     std::fs::write(dir.join(name), sequence(32, 18, timeline)).unwrap();
+}
+
+fn keys(fps: &str, first: u64, a: &str, b: &str) -> String {
+    format!(
+        "timeline:\n  fps: {fps}\n  first_frame: {first}\n  keyframes:\n    - {{ {a}, position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }}\n    - {{ {b}, position: [1.5, 0.4, 0.5] }}\n"
+    )
+}
+
+fn camera_csv(dir: &Path, file: &str) -> String {
+    let out = run_in(dir, &["camera", file]);
+    assert!(out.status.success(), "{file}: {}", stderr(&out));
+    String::from_utf8(out.stdout).unwrap()
 }
 
 #[test]
@@ -46,4 +59,61 @@ fn an_output_directory_that_takes_no_files_is_refused_before_rendering() {
         stderr(&out)
     );
     assert_eq!(files(&dir), ["seq.yaml", "taken"]);
+}
+
+#[test]
+fn keys_by_frame_number_and_fraction_fall_exactly_on_their_frames() {
+    let dir = scratch("frame-keys");
+    // At 24000/1001 from frame 1001, frame 1072 shows (71·1001)/24000 s.
+    write(
+        &dir,
+        "frames.yaml",
+        &keys("24000/1001", 1001, "frame: 1001", "frame: 1072"),
+    );
+    write(
+        &dir,
+        "fraction.yaml",
+        &keys("24000/1001", 1001, "time: 0", "time: 71071/24000"),
+    );
+    let by_frame = camera_csv(&dir, "frames.yaml");
+    assert_eq!(by_frame, camera_csv(&dir, "fraction.yaml"));
+    assert_eq!(by_frame.lines().count(), 1 + 72, "{by_frame}");
+    assert!(
+        by_frame.lines().last().unwrap().starts_with("1072,"),
+        "{by_frame}"
+    );
+    write(&dir, "plain.yaml", &keys("24", 0, "time: 0", "time: 71/24"));
+    write(&dir, "frame.yaml", &keys("24", 0, "frame: 0", "frame: 71"));
+    assert_eq!(
+        camera_csv(&dir, "plain.yaml"),
+        camera_csv(&dir, "frame.yaml")
+    );
+}
+
+#[test]
+fn a_key_takes_one_of_time_and_frame() {
+    let dir = scratch("frame-keys-bad");
+    for (a, want) in [
+        (
+            "time: 0, frame: 0",
+            "seq.yaml:15:25: timeline.keyframes[0].frame: give either `time:`",
+        ),
+        (
+            "fov: 60",
+            "seq.yaml:15:7: timeline.keyframes[0]: needs `time:`",
+        ),
+        (
+            "frame: 3",
+            "timeline.keyframes[0].frame: frame 3 is before the first frame, timeline.first_frame (10)",
+        ),
+        (
+            "time: 1/0",
+            "seconds as a number or a fraction of whole numbers such as 71/24 (got `1/0`)",
+        ),
+    ] {
+        write(&dir, "seq.yaml", &keys("24", 10, a, "frame: 40"));
+        let out = run_in(&dir, &["check", "seq.yaml"]);
+        assert_eq!(out.status.code(), Some(2), "{a}: {}", stderr(&out));
+        assert!(stderr(&out).contains(want), "{a}: {}", stderr(&out));
+    }
 }
