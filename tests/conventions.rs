@@ -58,6 +58,10 @@ fn an_output_directory_that_takes_no_files_is_refused_before_rendering() {
         "{}",
         stderr(&out)
     );
+    // A video's folder too, whatever ffmpeg's presence.
+    let out = run_in(&dir, &["render", "seq.yaml", "--video", "/proc/x.mp4"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(!stderr(&out).contains("frame 0"), "{}", stderr(&out));
     assert_eq!(files(&dir), ["seq.yaml", "taken"]);
 }
 

@@ -229,6 +229,22 @@ pub struct RenderArgs {
     /// written when --output is given too.
     #[arg(long, value_name = "FORMAT")]
     pub(crate) pipe: Option<StreamFormat>,
+    /// Render and encode a video in one step with the system's ffmpeg: .mp4, .mov or .mkv
+    /// (H.264 yuv420p; ProRes 4444 with alpha in .mov/.mkv), at the job's size and exact
+    /// frame rate. Written under a temporary name and renamed when ffmpeg succeeds; an
+    /// existing file is replaced only with --force. Frame files are written too only when
+    /// --output is given.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["pipe", "claim", "shard"])]
+    pub(crate) video: Option<PathBuf>,
+    /// Extra ffmpeg output options for --video, split at spaces (e.g. "-crf 18 -preset
+    /// slow"); they come after rayreel's own, so they replace them.
+    #[arg(
+        long,
+        value_name = "ARGS",
+        requires = "video",
+        allow_hyphen_values = true
+    )]
+    pub(crate) video_args: Option<String>,
     /// Print (on stderr) the ffmpeg command that reads the --pipe stream, or the frame files.
     #[arg(long)]
     pub(crate) print_ffmpeg: bool,

@@ -6,7 +6,7 @@ use crate::claim::{self, Claims, Held};
 use crate::cli::job::Job;
 use crate::cli::{ProgressFormat, RenderArgs};
 use crate::frameset::FrameSet;
-use crate::output::{self, Files, stream::StreamFormat};
+use crate::output::{self, Files, stream::StreamFormat, video::VideoJob};
 use crate::plan::{self, Plan, State};
 use crate::progress::Progress;
 use crate::schedule::{self, Batch, Outcome, RunError, Task};
@@ -38,6 +38,7 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     let sixteen_bit = spec.sixteen_bit;
     let warnings = crate::warnings::for_sequence(&spec.seq);
     let files = spec.render_files(&args)?;
+    let video = video_job(&args, &spec.seq, sixteen_bit)?;
     let Job { seq, frames, .. } = spec;
     if args.dry_run {
         warnings
@@ -46,13 +47,27 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
         let plan = files
             .as_ref()
             .map(|f| plan::plan(&seq, &frames, f, args.force));
+        if args.print_ffmpeg {
+            let stream = args.pipe.map(|p| (p, sixteen_bit));
+            let line = match &video {
+                Some(video) => Some(video.command_line()),
+                None => ffmpeg_line(&seq, stream, files.as_ref()),
+            };
+            line.iter().for_each(|l| crate::console::note(l));
+        }
         return print_dry_run(&seq, plan.as_ref(), &frames, args.pipe.is_some());
     }
     let (pool, threads) = workers(args.threads)?;
+    if let Some(video) = &video {
+        video.preflight().map_err(Error::Failed)?;
+    }
     if let Some(files) = &files {
         prepare(files, &frames)?;
     }
-    let stream = args.pipe.map(|p| (p, sixteen_bit));
+    let stream = match &video {
+        Some(video) => Some(video.stream()),
+        None => args.pipe.map(|p| (p, sixteen_bit)),
+    };
     let plan = files
         .as_ref()
         .map(|f| plan::plan(&seq, &frames, f, args.force));
@@ -62,7 +77,17 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     if let (Some(plan), Some(files)) = (&plan, &files) {
         report_skipped(&progress, plan, files);
     }
-    video_notes(&progress, &seq, stream, files.as_ref(), args.print_ffmpeg);
+    if video.is_some() {
+        progress.stream_to = "to ffmpeg";
+    }
+    match &video {
+        Some(video) if args.print_ffmpeg => progress.command(&video.command_line()),
+        Some(_) => {}
+        None => video_notes(&progress, &seq, stream, files.as_ref(), args.print_ffmpeg),
+    }
+    let mut encoder = video.as_ref().map(VideoJob::start).transpose();
+    let encoder = encoder.as_mut().map_err(|e| Error::Failed(e.clone()))?;
+    let stream_out = encoder.as_mut().and_then(|e| e.take_input());
     let claims = args
         .claim
         .then(|| Arc::new(Claims::new(Duration::from_secs(args.claim_timeout))));
@@ -71,12 +96,57 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
         tasks,
         files,
         stream,
-        stream_out: None,
+        stream_out: stream_out.map(|s| Box::new(s) as Box<dyn std::io::Write + Send>),
         threads,
         claims,
     };
     let outcome = run_job(&pool, batch, &frames, &mut progress)?;
+    let outcome = match encoder.take() {
+        Some(encoder) => end_video(encoder, outcome)?,
+        None => outcome,
+    };
     finish(outcome, plan.as_ref(), stream.is_some())
+}
+
+/// `--video`'s job from the command line and the sequence as applied (size, alpha, rate).
+fn video_job(
+    args: &RenderArgs,
+    seq: &Sequence,
+    sixteen_bit: bool,
+) -> Result<Option<VideoJob>, Error> {
+    let Some(path) = &args.video else {
+        return Ok(None);
+    };
+    let extra = args
+        .video_args
+        .as_deref()
+        .unwrap_or("")
+        .split_whitespace()
+        .map(String::from)
+        .collect();
+    let t = &seq.timeline;
+    let rate = output::video::exact_rate(t.clock.fraction, t.fps);
+    let size = (seq.settings.width, seq.settings.height);
+    let (alpha, force) = (seq.settings.alpha, args.force);
+    VideoJob::new(path.clone(), alpha, sixteen_bit, size, rate, extra, force)
+        .map(Some)
+        .map_err(|e| Error::Usage(format!("--video: {e}")))
+}
+
+/// After the run: a finished stream (or one ffmpeg ended on its own) is encoded and the video
+/// published, or ffmpeg's failure reported; any other end drops the encoder, which stops
+/// ffmpeg and removes its temporary.
+fn end_video(
+    encoder: output::video::Encoder,
+    outcome: Result<Outcome, RunError>,
+) -> Result<Result<Outcome, RunError>, Error> {
+    match outcome {
+        Ok(Outcome::Complete { .. } | Outcome::ReaderClosed { .. }) => {
+            encoder.finish().map_err(Error::Failed)?;
+            Ok(outcome)
+        }
+        other => Ok(other),
+    }
 }
 
 /// Progress as `--progress` and `--quiet` ask: `total` frames to render of `frame_count`.
@@ -341,26 +411,13 @@ fn video_notes(
     files: Option<&Files>,
     print: bool,
 ) {
-    use output::stream::{PAD, Source, ffmpeg_command};
+    use output::stream::PAD;
     let (w, h) = (seq.settings.width, seq.settings.height);
-    let pattern = files.map(|f| f.pattern.ffmpeg());
-    let source = match (stream, &pattern) {
-        (Some((format, sixteen_bit)), _) => Some(Source::Stream {
-            format,
-            sixteen_bit,
-        }),
-        (None, Some(pattern)) => Some(Source::Files {
-            pattern,
-            first: seq.timeline.first_frame(),
-        }),
-        (None, None) => None,
+    let Some(line) = ffmpeg_line(seq, stream, files) else {
+        return;
     };
-    let Some(source) = source else { return };
     if print {
-        let out = format!("{}.mp4", seq.name);
-        let fps = seq.timeline.fps_text();
-        let alpha = seq.settings.alpha;
-        progress.command(&ffmpeg_command(source, alpha, (w, h), &fps, &out));
+        progress.command(&line);
     }
     // ProRes 4444, which alpha frames go to, takes odd sizes.
     if (w % 2 == 1 || h % 2 == 1) && !seq.settings.alpha {
@@ -373,6 +430,40 @@ fn video_notes(
             None => progress.note(&text),
         }
     }
+}
+
+/// The ffmpeg command that reads the stream, or else the frame files, for the job as given
+/// (its size after presets, its frame rate); `None` when there is neither.
+fn ffmpeg_line(
+    seq: &Sequence,
+    stream: Option<(StreamFormat, bool)>,
+    files: Option<&Files>,
+) -> Option<String> {
+    use output::stream::{Source, ffmpeg_command};
+    let pattern = files.map(|f| f.pattern.ffmpeg());
+    let source = match (stream, &pattern) {
+        (Some((format, sixteen_bit)), _) => Source::Stream {
+            format,
+            sixteen_bit,
+        },
+        (None, Some(pattern)) => Source::Files {
+            pattern,
+            first: seq.timeline.first_frame(),
+        },
+        (None, None) => return None,
+    };
+    let out = format!("{}.mp4", seq.name);
+    let (size, alpha) = (
+        (seq.settings.width, seq.settings.height),
+        seq.settings.alpha,
+    );
+    Some(ffmpeg_command(
+        source,
+        alpha,
+        size,
+        &seq.timeline.fps_text(),
+        &out,
+    ))
 }
 
 /// `interrupted: 3 frames written and 14 streamed to stdout in this run; …`.

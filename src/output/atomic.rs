@@ -139,6 +139,12 @@ pub(crate) fn probe_writable(dir: &Path) -> std::io::Result<()> {
     fs::remove_file(&tmp)
 }
 
+/// A fresh temporary for `path`, created empty (exclusively, not through a link) for another
+/// program to write: ffmpeg encodes a video there.
+pub(crate) fn reserve_temp(path: &Path) -> std::io::Result<PathBuf> {
+    create_temp(path).map(|(tmp, _)| tmp)
+}
+
 /// A temporary's name split into NAME (or its hash), host and pid; `None` for any other
 /// name. Temporaries of earlier versions (`…-HOST-PID`, no random part) count too.
 fn parse_temp(file_name: &str) -> Option<(&str, &str, i32)> {
