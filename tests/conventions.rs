@@ -1,6 +1,7 @@
 //! What users coming from Blender and from a shell trip over, through the real binary: an
 //! output directory that cannot take files is refused before anything renders; keys by frame
-//! number and as exact fractions of seconds.
+//! number and as exact fractions of seconds; `--frames` misses that say how frames are
+//! numbered; a pattern lost to a YAML comment; an output without a file type.
 
 mod common;
 use common::*;
@@ -120,4 +121,86 @@ fn a_key_takes_one_of_time_and_frame() {
         assert_eq!(out.status.code(), Some(2), "{a}: {}", stderr(&out));
         assert!(stderr(&out).contains(want), "{a}: {}", stderr(&out));
     }
+}
+
+#[test]
+fn frames_outside_the_timeline_say_how_frames_are_numbered() {
+    let dir = scratch("frames-numbering");
+    let talk = repo().join("sequences/talk.yaml");
+    let out = run_in(
+        &dir,
+        &[
+            "render",
+            talk.to_str().unwrap(),
+            "--frames",
+            "1",
+            "--dry-run",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert!(err.contains("which has frames 0-0"), "{err}");
+    assert!(
+        err.contains("numbered from 0") && err.contains("first_frame: 1"),
+        "{err}"
+    );
+    write(&dir, "seq.yaml", &keys("24", 1, "frame: 1", "frame: 73"));
+    let out = run_in(
+        &dir,
+        &["render", "seq.yaml", "--frames", "0-72", "--dry-run"],
+    );
+    assert!(
+        stderr(&out).contains("numbered from timeline.first_frame (1)"),
+        "{}",
+        stderr(&out)
+    );
+    let out = run_in(
+        &dir,
+        &["render", "seq.yaml", "--frames", "1-73", "--dry-run"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
+#[test]
+fn a_pattern_lost_to_a_yaml_comment_is_a_warning() {
+    let dir = scratch("lost-pattern");
+    let text = sequence(32, 18, THREE_KEYS) + "output: ####.png\n";
+    std::fs::write(dir.join("seq.yaml"), &text).unwrap();
+    let out = run_in(&dir, &["check", "seq.yaml"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.contains("seq.yaml:"), "{err}");
+    assert!(
+        err.contains("starts a YAML comment") && err.contains("output: \"####.png\""),
+        "{err}"
+    );
+    assert!(err.contains("frames/seq/frame_####.png"), "{err}");
+    // Quoted, or a plain comment after a pattern, says nothing.
+    for line in [
+        "output: \"####.png\"\n",
+        "output: out/f_####.png  # where they go\n",
+    ] {
+        let text = sequence(32, 18, THREE_KEYS) + line;
+        std::fs::write(dir.join("seq.yaml"), &text).unwrap();
+        let out = run_in(&dir, &["check", "seq.yaml"]);
+        assert!(
+            !stderr(&out).contains("YAML comment"),
+            "{line}: {}",
+            stderr(&out)
+        );
+    }
+}
+
+#[test]
+fn an_output_without_a_file_type_says_which_to_add() {
+    let dir = scratch("no-extension");
+    write(&dir, "seq.yaml", THREE_KEYS);
+    let out = run_in(&dir, &["render", "seq.yaml", "-o", "out/frame_####"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert!(
+        err.contains("add .png or .exr (e.g. `out/frame_####.png`)"),
+        "{err}"
+    );
+    assert!(!err.contains("`.`"), "{err}");
 }

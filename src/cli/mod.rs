@@ -20,10 +20,11 @@ const EXAMPLES: &str = "\
 Examples:
   rayreel render sequences/orbit.yaml
   rayreel render sequences/talk.yaml --size 640x360 --output /tmp/talk/frame_####.png
-  rayreel render sequences/talk.yaml --frames 24 --output still.png
+  rayreel render sequences/orbit.yaml --frames 24 --output still.png
   rayreel render sequences/orbit.yaml --frames 0-47:2 --threads 2
   rayreel render sequences/orbit.yaml --output frames/orbit/frame_%04d.exr --depth
-  rayreel render sequences/orbit.yaml --pipe raw --quiet | ffmpeg -f rawvideo -pix_fmt rgb24 -s 1280x720 -r 24 -i - -c:v libx264 -pix_fmt yuv420p orbit.mp4
+  rayreel render sequences/orbit.yaml --video orbit.mp4
+  rayreel render sequences/orbit.yaml --pipe png --quiet | ffmpeg -f image2pipe -framerate 24 -i - -c:v libx264 -pix_fmt yuv420p orbit.mp4
   rayreel render sequences/orbit.yaml --dry-run
   rayreel render sequences/orbit.yaml --shard 2/4
   rayreel status sequences/orbit.yaml
