@@ -186,3 +186,39 @@ fn video_names_its_containers_and_keeps_apart_from_pipes() {
     );
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn a_stopped_video_leaves_nothing_under_any_name() {
+    if !tools() {
+        return;
+    }
+    let dir = scratch("video-stop");
+    // 2000 frames: long enough to be stopped while frames go to ffmpeg.
+    let timeline = "timeline:\n  fps: 24\n  orbit: { center: [-0.1, 0, -0.6], radius: 1.6, height: 0.35, duration: 83.3, turns: 0.05, look_at: [-0.1, -0.1, -0.6] }\n";
+    std::fs::write(dir.join("seq.yaml"), sequence(64, 36, timeline)).unwrap();
+    for sig in [libc::SIGINT, libc::SIGTERM] {
+        let mut child = bin()
+            .args(["render", "seq.yaml", "--threads", "1", "--progress", "json"])
+            .args(["--video", "out.mp4"])
+            .current_dir(&dir)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Wait for a frame to reach ffmpeg.
+        let mut err = std::io::BufReader::new(child.stderr.take().unwrap());
+        let mut line = String::new();
+        while std::io::BufRead::read_line(&mut err, &mut line).unwrap() > 0
+            && !line.contains("to ffmpeg")
+        {
+            line.clear();
+        }
+        assert!(line.contains("to ffmpeg"), "no frame went to ffmpeg");
+        signal(&child, sig);
+        let status = child.wait().unwrap();
+        let mut rest = String::new();
+        std::io::Read::read_to_string(&mut err, &mut rest).unwrap();
+        assert_eq!(status.code(), Some(128 + sig), "{rest}");
+        assert!(rest.contains("no video was made"), "{rest}");
+        assert_eq!(files(&dir), ["seq.yaml"], "after signal {sig}");
+    }
+}

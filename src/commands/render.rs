@@ -135,7 +135,7 @@ fn video_job(
 
 /// After the run: a finished stream (or one ffmpeg ended on its own) is encoded and the video
 /// published, or ffmpeg's failure reported; any other end drops the encoder, which stops
-/// ffmpeg and removes its temporary.
+/// ffmpeg and removes its temporary (a signal says that no video was made).
 fn end_video(
     encoder: output::video::Encoder,
     outcome: Result<Outcome, RunError>,
@@ -144,6 +144,19 @@ fn end_video(
         Ok(Outcome::Complete { .. } | Outcome::ReaderClosed { .. }) => {
             encoder.finish().map_err(Error::Failed)?;
             Ok(outcome)
+        }
+        Ok(Outcome::Interrupted { written, .. }) => {
+            drop(encoder);
+            let files = match written {
+                0 => String::new(),
+                n => format!(" ({} written)", plural(n as u64, "frame file")),
+            };
+            Err(Error::Interrupted(
+                format!(
+                    "interrupted: no video was made{files}; run the same command again to make it"
+                ),
+                signals::interrupt_code(),
+            ))
         }
         other => Ok(other),
     }
