@@ -185,6 +185,32 @@ fn video_names_its_containers_and_keeps_apart_from_pipes() {
         &["render", "seq.yaml", "--video", "x.mp4", "--pipe", "raw"],
     );
     assert_eq!(out.status.code(), Some(2));
+    // A dry run says what the video would take and prints the command, making nothing.
+    let out = run_in(
+        &dir,
+        &[
+            "render",
+            "seq.yaml",
+            "--video",
+            "v.mp4",
+            "--dry-run",
+            "--print-ffmpeg",
+            "--quality",
+            "draft",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let plan = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        plan.contains("would render frames 0-23 into v.mp4"),
+        "{plan}"
+    );
+    let err = stderr(&out);
+    assert!(
+        err.contains("-s 32x18 -r 24/1 -i -") && err.ends_with("v.mp4\n"),
+        "{err}"
+    );
+    assert_eq!(files(&dir), ["seq.yaml"]);
 }
 
 #[test]

@@ -55,7 +55,8 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
             };
             line.iter().for_each(|l| crate::console::note(l));
         }
-        return print_dry_run(&seq, plan.as_ref(), &frames, args.pipe.is_some());
+        let video = video.as_ref().map(|v| v.path.as_path());
+        return print_dry_run(&seq, (plan.as_ref(), video), &frames, args.pipe.is_some());
     }
     let (pool, threads) = workers(args.threads)?;
     if let Some(video) = &video {
@@ -358,17 +359,26 @@ fn report_waiting(progress: &Progress, files: &Files, held: &[u64]) {
 /// stream must never get text.
 fn print_dry_run(
     seq: &Sequence,
-    plan: Option<&Plan>,
+    (plan, video): (Option<&Plan>, Option<&std::path::Path>),
     frames: &FrameSet,
     piping: bool,
 ) -> Result<(), Error> {
-    let (text, rendering) = match plan {
-        Some(plan) => {
+    let (text, rendering) = match (plan, video) {
+        // A video takes every selected frame, whatever the files hold.
+        (plan, Some(video)) => {
+            let summary = plan
+                .map(|p| format!("{}\n", p.summary()))
+                .unwrap_or_default();
+            let video = shown(video);
+            let text = format!("{summary}would render frames {frames} into {video}\n");
+            (text, frames.len())
+        }
+        (Some(plan), None) => {
             let render = plan.to_render();
             let text = format!("{}\nwould render: {render}\n", plan.summary());
             (text, render.len())
         }
-        None => (format!("would stream frames: {frames}\n"), frames.len()),
+        (None, None) => (format!("would stream frames: {frames}\n"), frames.len()),
     };
     let (cost, warning) = super::check::cost(seq, rendering);
     if let Some(w) = warning {
