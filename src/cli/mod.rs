@@ -246,7 +246,9 @@ pub struct RenderArgs {
         allow_hyphen_values = true
     )]
     pub(crate) video_args: Option<String>,
-    /// Print (on stderr) the ffmpeg command that reads the --pipe stream, or the frame files.
+    /// Print (on stderr) the ffmpeg command that reads the --pipe stream, or the frame files,
+    /// for the job's own size and rate; with --video, the command it runs. With --dry-run it
+    /// prints without rendering.
     #[arg(long)]
     pub(crate) print_ffmpeg: bool,
     /// Print which frames are up to date, stale, missing, corrupt or foreign, and render nothing.

@@ -41,22 +41,8 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     let video = video_job(&args, &spec.seq, sixteen_bit)?;
     let Job { seq, frames, .. } = spec;
     if args.dry_run {
-        warnings
-            .iter()
-            .for_each(|w| crate::console::warning(&format!("warning: {w}")));
-        let plan = files
-            .as_ref()
-            .map(|f| plan::plan(&seq, &frames, f, args.force));
-        if args.print_ffmpeg {
-            let stream = args.pipe.map(|p| (p, sixteen_bit));
-            let line = match &video {
-                Some(video) => Some(video.command_line()),
-                None => ffmpeg_line(&seq, stream, files.as_ref()),
-            };
-            line.iter().for_each(|l| crate::console::note(l));
-        }
-        let video = video.as_ref().map(|v| v.path.as_path());
-        return print_dry_run(&seq, (plan.as_ref(), video), &frames, args.pipe.is_some());
+        let job = (&seq, &frames, sixteen_bit);
+        return dry_run(&args, job, files.as_ref(), video.as_ref(), &warnings);
     }
     let (pool, threads) = workers(args.threads)?;
     if let Some(video) = &video {
@@ -78,16 +64,12 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     if let (Some(plan), Some(files)) = (&plan, &files) {
         report_skipped(&progress, plan, files);
     }
-    if video.is_some() {
-        progress.stream_to = "to ffmpeg";
-    }
     match &video {
         Some(video) if args.print_ffmpeg => progress.command(&video.command_line()),
         Some(_) => {}
         None => video_notes(&progress, &seq, stream, files.as_ref(), args.print_ffmpeg),
     }
-    let mut encoder = video.as_ref().map(VideoJob::start).transpose();
-    let encoder = encoder.as_mut().map_err(|e| Error::Failed(e.clone()))?;
+    let mut encoder = start_video(video.as_ref(), &mut progress)?;
     let stream_out = encoder.as_mut().and_then(|e| e.take_input());
     let claims = args
         .claim
@@ -109,6 +91,42 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     finish(outcome, plan.as_ref(), stream.is_some())
 }
 
+/// `--dry-run`: the warnings, the ffmpeg line if asked for, and the plan; nothing is made.
+fn dry_run(
+    args: &RenderArgs,
+    (seq, frames, sixteen_bit): (&Sequence, &FrameSet, bool),
+    files: Option<&Files>,
+    video: Option<&VideoJob>,
+    warnings: &[String],
+) -> Result<(), Error> {
+    warnings
+        .iter()
+        .for_each(|w| crate::console::warning(&format!("warning: {w}")));
+    let plan = files.map(|f| plan::plan(seq, frames, f, args.force));
+    if args.print_ffmpeg {
+        let stream = args.pipe.map(|p| (p, sixteen_bit));
+        let line = match video {
+            Some(video) => Some(video.command_line()),
+            None => ffmpeg_line(seq, stream, files),
+        };
+        line.iter().for_each(|l| crate::console::note(l));
+    }
+    let video = video.map(|v| v.path.as_path());
+    print_dry_run(seq, (plan.as_ref(), video), frames, args.pipe.is_some())
+}
+
+/// ffmpeg started for `--video` (frame lines then say `to ffmpeg`), before any frame renders.
+fn start_video(
+    video: Option<&VideoJob>,
+    progress: &mut Progress,
+) -> Result<Option<output::video::Encoder>, Error> {
+    let Some(video) = video else {
+        return Ok(None);
+    };
+    progress.stream_to = "to ffmpeg";
+    video.start().map(Some).map_err(Error::Failed)
+}
+
 /// `--video`'s job from the command line and the sequence as applied (size, alpha, rate).
 fn video_job(
     args: &RenderArgs,
@@ -126,10 +144,13 @@ fn video_job(
         .map(String::from)
         .collect();
     let t = &seq.timeline;
-    let rate = output::video::exact_rate(t.clock.fraction, t.fps);
-    let size = (seq.settings.width, seq.settings.height);
-    let (alpha, force) = (seq.settings.alpha, args.force);
-    VideoJob::new(path.clone(), alpha, sixteen_bit, size, rate, extra, force)
+    let picture = output::video::Picture {
+        alpha: seq.settings.alpha,
+        sixteen_bit,
+        size: (seq.settings.width, seq.settings.height),
+        fps: output::video::exact_rate(t.clock.fraction, t.fps),
+    };
+    VideoJob::new(path.clone(), picture, extra, args.force)
         .map(Some)
         .map_err(|e| Error::Usage(format!("--video: {e}")))
 }

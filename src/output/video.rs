@@ -19,13 +19,19 @@ pub(crate) struct VideoJob {
     pub(crate) path: PathBuf,
     /// ffmpeg's `-f` for the container: the temporary's name tells ffmpeg nothing.
     container: &'static str,
+    picture: Picture,
+    pub(crate) extra: Vec<String>,
+    pub(crate) force: bool,
+}
+
+/// The frames a video is made of, as the job renders them.
+#[derive(Debug, Clone)]
+pub(crate) struct Picture {
     pub(crate) alpha: bool,
     pub(crate) sixteen_bit: bool,
     pub(crate) size: (u32, u32),
     /// The frame rate as an exact fraction, `24/1` or `24000/1001`.
     pub(crate) fps: String,
-    pub(crate) extra: Vec<String>,
-    pub(crate) force: bool,
 }
 
 /// The container for a video's extension, or why there is none.
@@ -47,24 +53,16 @@ pub(crate) fn container(path: &Path, alpha: bool) -> Result<&'static str, String
 }
 
 impl VideoJob {
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
         path: PathBuf,
-        alpha: bool,
-        sixteen_bit: bool,
-        size: (u32, u32),
-        fps: String,
+        picture: Picture,
         extra: Vec<String>,
         force: bool,
     ) -> Result<VideoJob, String> {
-        let container = container(&path, alpha)?;
         Ok(VideoJob {
+            container: container(&path, picture.alpha)?,
             path,
-            container,
-            alpha,
-            sixteen_bit,
-            size,
-            fps,
+            picture,
             extra,
             force,
         })
@@ -72,20 +70,21 @@ impl VideoJob {
 
     /// The stream ffmpeg reads: raw frames, 16 bits when asked (ProRes keeps 10).
     pub(crate) fn stream(&self) -> (StreamFormat, bool) {
-        (StreamFormat::Raw, self.sixteen_bit)
+        (StreamFormat::Raw, self.picture.sixteen_bit)
     }
 
     /// ffmpeg's arguments, writing the video to `out`.
     pub(crate) fn args(&self, out: &Path) -> Vec<String> {
+        let p = &self.picture;
         let source = Source::Stream {
             format: StreamFormat::Raw,
-            sixteen_bit: self.sixteen_bit,
+            sixteen_bit: p.sixteen_bit,
         };
         let mut words: Vec<String> = ["-hide_banner", "-loglevel", "error", "-nostats"]
             .map(String::from)
             .to_vec();
-        words.extend(input_words(source, self.alpha, self.size, &self.fps));
-        words.extend(codec_words(self.alpha, self.size));
+        words.extend(input_words(source, p.alpha, p.size, &p.fps));
+        words.extend(codec_words(p.alpha, p.size));
         words.extend(self.extra.iter().cloned());
         words.extend(["-f".into(), self.container.into(), "-y".into()]);
         words.push(out.to_string_lossy().into_owned());
@@ -109,10 +108,13 @@ impl VideoJob {
                 self.path.display()
             ));
         }
-        let dir = crate::plan::directory(&self.path);
-        std::fs::create_dir_all(&dir)
+        let dir = match self.path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        std::fs::create_dir_all(dir)
             .map_err(|e| format!("{}: cannot create directory: {e}", dir.display()))?;
-        atomic::probe_writable(&dir).map_err(|e| {
+        atomic::probe_writable(dir).map_err(|e| {
             format!(
                 "{}: cannot write files in this directory: {e}",
                 dir.display()
