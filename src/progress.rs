@@ -21,6 +21,8 @@ pub(crate) struct Progress {
     failed: Cell<u64>,
     /// Whether a frame's colour beyond the largest half float has been reported.
     half_overflow_told: Cell<bool>,
+    /// Where streamed frames go, as frame lines say it: `to stdout`, or `to ffmpeg` (--video).
+    pub(crate) stream_to: &'static str,
     start: Instant,
 }
 
@@ -45,6 +47,7 @@ impl Progress {
             total,
             sequence_frames,
             done: 0,
+            stream_to: "to stdout",
             skipped: Cell::new(0),
             failed: Cell::new(0),
             half_overflow_told: Cell::new(false),

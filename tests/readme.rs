@@ -517,3 +517,82 @@ fn no_page_cites_issue_numbers() {
     }
     assert!(found.is_empty(), "issue numbers:\n{}", found.join("\n"));
 }
+
+/// The examples of `rayreel --help` (the same list ends `render --help`): its indented
+/// `rayreel …` lines after `Examples:`.
+fn help_examples() -> Vec<Vec<String>> {
+    let out = bin().arg("--help").output().unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<String> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("Examples:"))
+        .map(|l| l.trim().to_string())
+        .filter(|l| l.starts_with("rayreel "))
+        .collect();
+    commands(&lines, false)
+}
+
+/// `args` made small enough to run in a test: renders become dry runs (the job is still built
+/// and checked whole), the tools get their smallest settings, and `/tmp/…` lands in `dir`.
+fn small_run(args: &[String], dir: &Path) -> Vec<String> {
+    let mut args: Vec<String> = args
+        .iter()
+        .map(|a| match a.strip_prefix("/tmp/") {
+            Some(rest) => dir.join(rest).to_string_lossy().into_owned(),
+            None => a.clone(),
+        })
+        .collect();
+    let has = |args: &[String], flag: &str| args.iter().any(|a| a == flag);
+    let extra: &[&str] = match args[0].as_str() {
+        "render" if !has(&args, "--dry-run") => &["--dry-run"],
+        "preview" if !has(&args, "--tiles") => &["--tiles", "1"],
+        "measure" if !has(&args, "--size") => &["--size", "16x9", "--runs", "1"],
+        "bench" if !has(&args, "--only") => &["--quick", "--runs", "1", "--only", "kernels"],
+        "bench" => &["--quick", "--runs", "1"],
+        _ => &[],
+    };
+    args.extend(extra.iter().map(|s| s.to_string()));
+    args
+}
+
+#[test]
+fn every_example_in_help_and_the_readme_runs() {
+    let tmp = scratch("examples-run");
+    std::os::unix::fs::symlink(repo().join("sequences"), tmp.join("sequences")).unwrap();
+    // The README's first sequence file, saved as it says.
+    let (blocks, _) = split(&read(&repo().join("README.md")));
+    let first = blocks
+        .iter()
+        .find(|b| b.info == "yaml" && b.lines.iter().any(|l| l.contains("frames/first")))
+        .expect("the README's first sequence file");
+    std::fs::write(tmp.join("first.yaml"), first.lines.join("\n") + "\n").unwrap();
+    let mut shown: Vec<(String, Vec<String>)> = help_examples()
+        .into_iter()
+        .map(|a| ("rayreel --help".to_string(), a))
+        .collect();
+    shown.extend(
+        shown_commands()
+            .into_iter()
+            .filter(|(p, _)| p == "README.md"),
+    );
+    assert!(shown.len() >= 30, "only {} examples found", shown.len());
+    let mut failed = Vec::new();
+    for (page, args) in &shown {
+        let run = small_run(args, &tmp);
+        let out = run_in(&tmp, &run.iter().map(String::as_str).collect::<Vec<_>>());
+        // `status` exits 1 when frames are missing, which they are here.
+        let fine = out.status.success() || (args[0] == "status" && out.status.code() == Some(1));
+        if !fine {
+            failed.push(format!(
+                "{page}: rayreel {}: {}",
+                run.join(" "),
+                stderr(&out).trim()
+            ));
+        }
+    }
+    assert!(
+        failed.is_empty(),
+        "examples that fail:\n{}",
+        failed.join("\n")
+    );
+}

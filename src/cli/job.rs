@@ -91,11 +91,12 @@ impl Job {
         Ok(Files { pattern, format })
     }
 
-    /// The file sink of a render: with `--pipe` the stream is the product, and files are
+    /// The file sink of a render: with `--pipe` or `--video` the stream is the product, and files are
     /// written too only when `--output` asks for them; `--claim` shares files, so it takes
     /// no stream.
     pub(crate) fn render_files(&self, args: &RenderArgs) -> Result<Option<Files>, JobError> {
-        let files = match args.pipe.is_none() || self.output_given {
+        let streaming = args.pipe.is_some() || args.video.is_some();
+        let files = match !streaming || self.output_given {
             true => Some(self.files(&args.job)?),
             false => None,
         };

@@ -20,10 +20,11 @@ const EXAMPLES: &str = "\
 Examples:
   rayreel render sequences/orbit.yaml
   rayreel render sequences/talk.yaml --size 640x360 --output /tmp/talk/frame_####.png
-  rayreel render sequences/talk.yaml --frames 24 --output still.png
+  rayreel render sequences/orbit.yaml --frames 24 --output still.png
   rayreel render sequences/orbit.yaml --frames 0-47:2 --threads 2
   rayreel render sequences/orbit.yaml --output frames/orbit/frame_%04d.exr --depth
-  rayreel render sequences/orbit.yaml --pipe raw --quiet | ffmpeg -f rawvideo -pix_fmt rgb24 -s 1280x720 -r 24 -i - -c:v libx264 -pix_fmt yuv420p orbit.mp4
+  rayreel render sequences/orbit.yaml --video orbit.mp4
+  rayreel render sequences/orbit.yaml --pipe png --quiet | ffmpeg -f image2pipe -framerate 24 -i - -c:v libx264 -pix_fmt yuv420p orbit.mp4
   rayreel render sequences/orbit.yaml --dry-run
   rayreel render sequences/orbit.yaml --shard 2/4
   rayreel status sequences/orbit.yaml
@@ -229,7 +230,25 @@ pub struct RenderArgs {
     /// written when --output is given too.
     #[arg(long, value_name = "FORMAT")]
     pub(crate) pipe: Option<StreamFormat>,
-    /// Print (on stderr) the ffmpeg command that reads the --pipe stream, or the frame files.
+    /// Render and encode a video in one step with the system's ffmpeg: .mp4, .mov or .mkv
+    /// (H.264 yuv420p; ProRes 4444 with alpha in .mov/.mkv), at the job's size and exact
+    /// frame rate. Written under a temporary name and renamed when ffmpeg succeeds; an
+    /// existing file is replaced only with --force. Frame files are written too only when
+    /// --output is given.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["pipe", "claim", "shard"])]
+    pub(crate) video: Option<PathBuf>,
+    /// Extra ffmpeg output options for --video, split at spaces (e.g. "-crf 18 -preset
+    /// slow"); they come after rayreel's own, so they replace them.
+    #[arg(
+        long,
+        value_name = "ARGS",
+        requires = "video",
+        allow_hyphen_values = true
+    )]
+    pub(crate) video_args: Option<String>,
+    /// Print (on stderr) the ffmpeg command that reads the --pipe stream, or the frame files,
+    /// for the job's own size and rate; with --video, the command it runs. With --dry-run it
+    /// prints without rendering.
     #[arg(long)]
     pub(crate) print_ffmpeg: bool,
     /// Print which frames are up to date, stale, missing, corrupt or foreign, and render nothing.

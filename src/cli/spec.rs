@@ -9,6 +9,15 @@ use crate::sequence::{MAX_DIMENSION, MAX_PIXELS};
 /// few, and a bound keeps expansion time bounded too.
 const MAX_ENTRIES: usize = 64;
 
+/// How frames are numbered, for a frame spec that missed: Blender starts at 1, rayreel at
+/// `timeline.first_frame` (0 unless set).
+fn numbering(first: u64) -> String {
+    match first {
+        0 => "; frames are numbered from 0 (set `timeline.first_frame: 1` or --first-frame 1 to number them from 1, as Blender does)".into(),
+        _ => format!("; frames are numbered from timeline.first_frame ({first})"),
+    }
+}
+
 /// What is wrong with a frame spec, a shard or a size (clap shows it after the flag).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum SpecError {
@@ -30,7 +39,7 @@ pub enum SpecError {
         "--shard auto needs SLURM_ARRAY_TASK_ID (a Slurm job array) or JOB_COMPLETION_INDEX with --shard-count (a Kubernetes Indexed Job); neither is set"
     )]
     NoScheduler,
-    #[error("frame {frame} is outside the timeline, which has frames {first}-{last}")]
+    #[error("frame {frame} is outside the timeline, which has frames {first}-{last}{}", numbering(*.first))]
     OutsideTimeline { frame: u64, first: u64, last: u64 },
     #[error("the range {0}-{1} runs backwards")]
     Backwards(u64, u64),

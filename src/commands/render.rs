@@ -6,7 +6,7 @@ use crate::claim::{self, Claims, Held};
 use crate::cli::job::Job;
 use crate::cli::{ProgressFormat, RenderArgs};
 use crate::frameset::FrameSet;
-use crate::output::{self, Files, stream::StreamFormat};
+use crate::output::{self, Files, stream::StreamFormat, video::VideoJob};
 use crate::plan::{self, Plan, State};
 use crate::progress::Progress;
 use crate::schedule::{self, Batch, Outcome, RunError, Task};
@@ -15,12 +15,18 @@ use crate::signals;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// Makes the frames' directory and removes this job's temporaries that processes which are
-/// gone left there.
+/// Makes the frames' directory, checks that files can be written there (before anything
+/// renders), and removes this job's temporaries that processes which are gone left there.
 fn prepare(files: &Files, frames: &FrameSet) -> Result<(), Error> {
     let dir = plan::directory(&files.frame_path(0));
     std::fs::create_dir_all(&dir)
         .map_err(|e| Error::Failed(format!("{}: cannot create directory: {e}", dir.display())))?;
+    output::atomic::probe_writable(&dir).map_err(|e| {
+        Error::Failed(format!(
+            "{}: cannot write files in this directory: {e}",
+            dir.display()
+        ))
+    })?;
     output::atomic::clean_leftovers(&dir, &files.pattern, frames);
     Ok(())
 }
@@ -32,21 +38,23 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     let sixteen_bit = spec.sixteen_bit;
     let warnings = crate::warnings::for_sequence(&spec.seq);
     let files = spec.render_files(&args)?;
+    let video = video_job(&args, &spec.seq, sixteen_bit)?;
     let Job { seq, frames, .. } = spec;
     if args.dry_run {
-        warnings
-            .iter()
-            .for_each(|w| crate::console::warning(&format!("warning: {w}")));
-        let plan = files
-            .as_ref()
-            .map(|f| plan::plan(&seq, &frames, f, args.force));
-        return print_dry_run(&seq, plan.as_ref(), &frames, args.pipe.is_some());
+        let job = (&seq, &frames, sixteen_bit);
+        return dry_run(&args, job, files.as_ref(), video.as_ref(), &warnings);
     }
     let (pool, threads) = workers(args.threads)?;
+    if let Some(video) = &video {
+        video.preflight().map_err(Error::Failed)?;
+    }
     if let Some(files) = &files {
         prepare(files, &frames)?;
     }
-    let stream = args.pipe.map(|p| (p, sixteen_bit));
+    let stream = match &video {
+        Some(video) => Some(video.stream()),
+        None => args.pipe.map(|p| (p, sixteen_bit)),
+    };
     let plan = files
         .as_ref()
         .map(|f| plan::plan(&seq, &frames, f, args.force));
@@ -56,7 +64,13 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     if let (Some(plan), Some(files)) = (&plan, &files) {
         report_skipped(&progress, plan, files);
     }
-    video_notes(&progress, &seq, stream, files.as_ref(), args.print_ffmpeg);
+    match &video {
+        Some(video) if args.print_ffmpeg => progress.command(&video.command_line()),
+        Some(_) => {}
+        None => video_notes(&progress, &seq, stream, files.as_ref(), args.print_ffmpeg),
+    }
+    let mut encoder = start_video(video.as_ref(), &mut progress)?;
+    let stream_out = encoder.as_mut().and_then(|e| e.take_input());
     let claims = args
         .claim
         .then(|| Arc::new(Claims::new(Duration::from_secs(args.claim_timeout))));
@@ -65,12 +79,109 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
         tasks,
         files,
         stream,
-        stream_out: None,
+        stream_out: stream_out.map(|s| Box::new(s) as Box<dyn std::io::Write + Send>),
         threads,
         claims,
     };
     let outcome = run_job(&pool, batch, &frames, &mut progress)?;
+    let outcome = match encoder.take() {
+        Some(encoder) => end_video(encoder, outcome)?,
+        None => outcome,
+    };
     finish(outcome, plan.as_ref(), stream.is_some())
+}
+
+/// `--dry-run`: the warnings, the ffmpeg line if asked for, and the plan; nothing is made.
+fn dry_run(
+    args: &RenderArgs,
+    (seq, frames, sixteen_bit): (&Sequence, &FrameSet, bool),
+    files: Option<&Files>,
+    video: Option<&VideoJob>,
+    warnings: &[String],
+) -> Result<(), Error> {
+    warnings
+        .iter()
+        .for_each(|w| crate::console::warning(&format!("warning: {w}")));
+    let plan = files.map(|f| plan::plan(seq, frames, f, args.force));
+    if args.print_ffmpeg {
+        let stream = args.pipe.map(|p| (p, sixteen_bit));
+        let line = match video {
+            Some(video) => Some(video.command_line()),
+            None => ffmpeg_line(seq, stream, files),
+        };
+        line.iter().for_each(|l| crate::console::note(l));
+    }
+    let video = video.map(|v| v.path.as_path());
+    print_dry_run(seq, (plan.as_ref(), video), frames, args.pipe.is_some())
+}
+
+/// ffmpeg started for `--video` (frame lines then say `to ffmpeg`), before any frame renders.
+fn start_video(
+    video: Option<&VideoJob>,
+    progress: &mut Progress,
+) -> Result<Option<output::video::Encoder>, Error> {
+    let Some(video) = video else {
+        return Ok(None);
+    };
+    progress.stream_to = "to ffmpeg";
+    video.start().map(Some).map_err(Error::Failed)
+}
+
+/// `--video`'s job from the command line and the sequence as applied (size, alpha, rate).
+fn video_job(
+    args: &RenderArgs,
+    seq: &Sequence,
+    sixteen_bit: bool,
+) -> Result<Option<VideoJob>, Error> {
+    let Some(path) = &args.video else {
+        return Ok(None);
+    };
+    let extra = args
+        .video_args
+        .as_deref()
+        .unwrap_or("")
+        .split_whitespace()
+        .map(String::from)
+        .collect();
+    let t = &seq.timeline;
+    let picture = output::video::Picture {
+        alpha: seq.settings.alpha,
+        sixteen_bit,
+        size: (seq.settings.width, seq.settings.height),
+        fps: output::video::exact_rate(t.clock.fraction, t.fps),
+    };
+    VideoJob::new(path.clone(), picture, extra, args.force)
+        .map(Some)
+        .map_err(|e| Error::Usage(format!("--video: {e}")))
+}
+
+/// After the run: a finished stream (or one ffmpeg ended on its own) is encoded and the video
+/// published, or ffmpeg's failure reported; any other end drops the encoder, which stops
+/// ffmpeg and removes its temporary (a signal says that no video was made).
+fn end_video(
+    encoder: output::video::Encoder,
+    outcome: Result<Outcome, RunError>,
+) -> Result<Result<Outcome, RunError>, Error> {
+    match outcome {
+        Ok(Outcome::Complete { .. } | Outcome::ReaderClosed { .. }) => {
+            encoder.finish().map_err(Error::Failed)?;
+            Ok(outcome)
+        }
+        Ok(Outcome::Interrupted { written, .. }) => {
+            drop(encoder);
+            let files = match written {
+                0 => String::new(),
+                n => format!(" ({} written)", plural(n as u64, "frame file")),
+            };
+            Err(Error::Interrupted(
+                format!(
+                    "interrupted: no video was made{files}; run the same command again to make it"
+                ),
+                signals::interrupt_code(),
+            ))
+        }
+        other => Ok(other),
+    }
 }
 
 /// Progress as `--progress` and `--quiet` ask: `total` frames to render of `frame_count`.
@@ -269,17 +380,26 @@ fn report_waiting(progress: &Progress, files: &Files, held: &[u64]) {
 /// stream must never get text.
 fn print_dry_run(
     seq: &Sequence,
-    plan: Option<&Plan>,
+    (plan, video): (Option<&Plan>, Option<&std::path::Path>),
     frames: &FrameSet,
     piping: bool,
 ) -> Result<(), Error> {
-    let (text, rendering) = match plan {
-        Some(plan) => {
+    let (text, rendering) = match (plan, video) {
+        // A video takes every selected frame, whatever the files hold.
+        (plan, Some(video)) => {
+            let summary = plan
+                .map(|p| format!("{}\n", p.summary()))
+                .unwrap_or_default();
+            let video = shown(video);
+            let text = format!("{summary}would render frames {frames} into {video}\n");
+            (text, frames.len())
+        }
+        (Some(plan), None) => {
             let render = plan.to_render();
             let text = format!("{}\nwould render: {render}\n", plan.summary());
             (text, render.len())
         }
-        None => (format!("would stream frames: {frames}\n"), frames.len()),
+        (None, None) => (format!("would stream frames: {frames}\n"), frames.len()),
     };
     let (cost, warning) = super::check::cost(seq, rendering);
     if let Some(w) = warning {
@@ -343,26 +463,13 @@ fn video_notes(
     files: Option<&Files>,
     print: bool,
 ) {
-    use output::stream::{PAD, Source, ffmpeg_command};
+    use output::stream::PAD;
     let (w, h) = (seq.settings.width, seq.settings.height);
-    let pattern = files.map(|f| f.pattern.ffmpeg());
-    let source = match (stream, &pattern) {
-        (Some((format, sixteen_bit)), _) => Some(Source::Stream {
-            format,
-            sixteen_bit,
-        }),
-        (None, Some(pattern)) => Some(Source::Files {
-            pattern,
-            first: seq.timeline.first_frame(),
-        }),
-        (None, None) => None,
+    let Some(line) = ffmpeg_line(seq, stream, files) else {
+        return;
     };
-    let Some(source) = source else { return };
     if print {
-        let out = format!("{}.mp4", seq.name);
-        let fps = seq.timeline.fps_text();
-        let alpha = seq.settings.alpha;
-        progress.command(&ffmpeg_command(source, alpha, (w, h), &fps, &out));
+        progress.command(&line);
     }
     // ProRes 4444, which alpha frames go to, takes odd sizes.
     if (w % 2 == 1 || h % 2 == 1) && !seq.settings.alpha {
@@ -375,6 +482,40 @@ fn video_notes(
             None => progress.note(&text),
         }
     }
+}
+
+/// The ffmpeg command that reads the stream, or else the frame files, for the job as given
+/// (its size after presets, its frame rate); `None` when there is neither.
+fn ffmpeg_line(
+    seq: &Sequence,
+    stream: Option<(StreamFormat, bool)>,
+    files: Option<&Files>,
+) -> Option<String> {
+    use output::stream::{Source, ffmpeg_command};
+    let pattern = files.map(|f| f.pattern.ffmpeg());
+    let source = match (stream, &pattern) {
+        (Some((format, sixteen_bit)), _) => Source::Stream {
+            format,
+            sixteen_bit,
+        },
+        (None, Some(pattern)) => Source::Files {
+            pattern,
+            first: seq.timeline.first_frame(),
+        },
+        (None, None) => return None,
+    };
+    let out = format!("{}.mp4", seq.name);
+    let (size, alpha) = (
+        (seq.settings.width, seq.settings.height),
+        seq.settings.alpha,
+    );
+    Some(ffmpeg_command(
+        source,
+        alpha,
+        size,
+        &seq.timeline.fps_text(),
+        &out,
+    ))
 }
 
 /// `interrupted: 3 frames written and 14 streamed to stdout in this run; …`.

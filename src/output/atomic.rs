@@ -130,6 +130,21 @@ fn create_temp(path: &Path) -> std::io::Result<(PathBuf, File)> {
     }
 }
 
+/// Checks that files can be made in `dir` by creating and removing a temporary there, so a
+/// directory that is read-only, write-protected or not a real one (under `/proc`) is
+/// reported before any frame renders rather than after the first one.
+pub(crate) fn probe_writable(dir: &Path) -> std::io::Result<()> {
+    let (tmp, file) = create_temp(&dir.join("probe"))?;
+    drop(file);
+    fs::remove_file(&tmp)
+}
+
+/// A fresh temporary for `path`, created empty (exclusively, not through a link) for another
+/// program to write: ffmpeg encodes a video there.
+pub(crate) fn reserve_temp(path: &Path) -> std::io::Result<PathBuf> {
+    create_temp(path).map(|(tmp, _)| tmp)
+}
+
 /// A temporary's name split into NAME (or its hash), host and pid; `None` for any other
 /// name. Temporaries of earlier versions (`…-HOST-PID`, no random part) count too.
 fn parse_temp(file_name: &str) -> Option<(&str, &str, i32)> {

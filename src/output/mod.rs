@@ -11,6 +11,7 @@ pub(crate) mod format;
 pub(crate) mod identity;
 pub mod png;
 pub(crate) mod stream;
+pub(crate) mod video;
 
 pub(crate) use format::{Compression, EncodeError, ExrPrecision};
 pub use format::{Existing, Expected, FileFormat};

@@ -50,11 +50,29 @@ pub(crate) enum Source<'a> {
 pub(crate) fn ffmpeg_command(
     source: Source,
     alpha: bool,
-    (width, height): (u32, u32),
+    size: (u32, u32),
     fps: &str,
     out: &str,
 ) -> String {
     let mut words: Vec<String> = vec!["ffmpeg".into()];
+    words.extend(input_words(source, alpha, size, fps));
+    words.extend(codec_words(alpha, size));
+    words.push(match alpha {
+        true => format!("{}.mov", out.strip_suffix(".mp4").unwrap_or(out)),
+        false => out.to_string(),
+    });
+    let quoted: Vec<String> = words.iter().map(|w| shell_quote(w)).collect();
+    quoted.join(" ")
+}
+
+/// ffmpeg's options for reading `source`, up to and including `-i`.
+pub(crate) fn input_words(
+    source: Source,
+    alpha: bool,
+    (width, height): (u32, u32),
+    fps: &str,
+) -> Vec<String> {
+    let mut words: Vec<String> = Vec::new();
     let mut add = |list: &[&str]| words.extend(list.iter().map(|w| w.to_string()));
     match source {
         Source::Stream {
@@ -76,25 +94,26 @@ pub(crate) fn ffmpeg_command(
             add(&["-i", pattern]);
         }
     }
-    if alpha {
-        let mov = format!("{}.mov", out.strip_suffix(".mp4").unwrap_or(out));
-        add(&[
+    words
+}
+
+/// The codec options: H.264 in yuv420p (padded to an even size), or ProRes 4444 with alpha.
+pub(crate) fn codec_words(alpha: bool, (width, height): (u32, u32)) -> Vec<String> {
+    let words: &[&str] = match alpha {
+        true => &[
             "-c:v",
             "prores_ks",
             "-profile:v",
             "4444",
             "-pix_fmt",
             "yuva444p10le",
-            &mov,
-        ]);
-    } else {
-        if width % 2 == 1 || height % 2 == 1 {
-            add(&["-vf", PAD]);
+        ],
+        false if width % 2 == 1 || height % 2 == 1 => {
+            &["-vf", PAD, "-c:v", "libx264", "-pix_fmt", "yuv420p"]
         }
-        add(&["-c:v", "libx264", "-pix_fmt", "yuv420p", out]);
-    }
-    let quoted: Vec<String> = words.iter().map(|w| shell_quote(w)).collect();
-    quoted.join(" ")
+        false => &["-c:v", "libx264", "-pix_fmt", "yuv420p"],
+    };
+    words.iter().map(|w| w.to_string()).collect()
 }
 
 /// The stream's pixels as ffmpeg names them.

@@ -184,7 +184,8 @@ impl Delivery<'_> {
         match order.push(frame, bytes, done.seconds) {
             Ok(sent) => {
                 for (n, seconds) in sent.into_iter().filter(|_| done.file.is_none()) {
-                    self.progress.frame_done(n, "to stdout", seconds);
+                    let to = self.progress.stream_to;
+                    self.progress.frame_done(n, to, seconds);
                 }
             }
             Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {

@@ -240,8 +240,39 @@ pub(crate) fn parse_drawable(
         true => Path::new(""),
         false => file.parent().unwrap_or(Path::new("")),
     };
-    let (seq, problem) = validate(raw, &name, base).map_err(located)?;
+    let (mut seq, problem) = validate(raw, &name, base).map_err(located)?;
+    seq.warnings
+        .extend(lost_output_pattern(file, text, &seq.output));
     Ok((seq, problem.map(located)))
+}
+
+/// `output: ####.png` unquoted: YAML reads a `#` after a space as the start of a comment, so
+/// the pattern is lost (and the default used) without a word; the line says what was meant.
+fn lost_output_pattern(file: &Path, text: &str, used: &str) -> Option<String> {
+    let (n, line) = text
+        .lines()
+        .enumerate()
+        .find(|(_, l)| l.starts_with("output:"))?;
+    let value = &line["output:".len()..];
+    if value.trim_start().starts_with(['"', '\'']) {
+        return None;
+    }
+    let comment = value
+        .find(" #")
+        .map(|i| i + 1)
+        .or(value.starts_with('#').then_some(0))?;
+    let lost = value[comment + 1..].trim();
+    let pattern_like = lost.starts_with('#') || [".png", ".exr"].iter().any(|e| lost.contains(e));
+    pattern_like.then(|| {
+        format!(
+            "{}:{}:{}: output: `#` after a space starts a YAML comment, so `{}` was dropped and frames go to `{used}`; quote the pattern: output: \"{}\"",
+            file.display(),
+            n + 1,
+            "output:".len() + comment + 1,
+            value[comment..].trim(),
+            value.trim()
+        )
+    })
 }
 
 /// The sequence, and the first key or frame whose camera cannot be built (see `load_drawable`).

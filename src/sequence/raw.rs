@@ -373,6 +373,7 @@ pub struct AmbientLight {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Timeline {
+    #[serde(default, deserialize_with = "fps")]
     pub fps: Option<Fps>,
     pub first_frame: Option<u64>,
     pub duration: Option<f64>,
@@ -399,7 +400,11 @@ pub enum Speed {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Keyframe {
-    pub time: f64,
+    /// Seconds: a number or an exact fraction (`71/24`). Exactly one of `time` and `frame`.
+    #[serde(default, deserialize_with = "key_time")]
+    pub time: Option<KeyTime>,
+    /// A frame number, as Blender keys: the key is at that frame's own time.
+    pub frame: Option<u64>,
     pub position: Option<V3>,
     pub look_at: Option<V3>,
     pub up: Option<V3>,
@@ -427,40 +432,78 @@ pub struct Orbit {
     pub fov: Option<f64>,
 }
 
-/// `fps: 24`, `fps: 29.97` or `fps: 24000/1001` (a fraction, as ffmpeg's `-r` takes it).
+/// A number, or a fraction of whole numbers kept exact until the loader divides it once:
+/// `fps: 24`, `fps: 29.97`, `fps: 24000/1001` (as ffmpeg's `-r` takes it), `time: 71/24`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Fps {
+pub enum Amount {
     Number(f64),
     Fraction(u64, u64),
 }
 
-impl<'de> Deserialize<'de> for Fps {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl Visitor<'_> for V {
-            type Value = Fps;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a number of frames per second or a fraction such as 24000/1001")
-            }
-            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Fps, E> {
-                Ok(Fps::Number(v))
-            }
-            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Fps, E> {
-                Ok(Fps::Number(v as f64))
-            }
-            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Fps, E> {
-                Ok(Fps::Number(v as f64))
-            }
-            fn visit_str<E: de::Error>(self, s: &str) -> Result<Fps, E> {
-                let whole = |t: &str| t.trim().parse::<u64>().ok().filter(|&n| n > 0);
-                match s.split_once('/').map(|(n, d)| (whole(n), whole(d))) {
-                    Some((Some(num), Some(den))) => Ok(Fps::Fraction(num, den)),
-                    _ => Err(E::custom(format!(
-                        "expected frames per second as a number or a fraction of whole numbers such as 24000/1001 (got `{s}`)"
-                    ))),
-                }
-            }
-        }
-        d.deserialize_any(V)
+/// `timeline.fps`: the fraction's numerator above 0 too.
+pub type Fps = Amount;
+
+/// `keyframes[].time`, in seconds.
+pub type KeyTime = Amount;
+
+fn fps<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Fps>, D::Error> {
+    d.deserialize_any(AmountVisitor {
+        what: "frames per second",
+        example: "24000/1001",
+        zero: false,
+    })
+}
+
+fn key_time<'de, D: Deserializer<'de>>(d: D) -> Result<Option<KeyTime>, D::Error> {
+    d.deserialize_any(AmountVisitor {
+        what: "seconds",
+        example: "71/24",
+        zero: true,
+    })
+}
+
+/// Reads an `Amount` (null: none); `zero` allows a fraction of 0.
+struct AmountVisitor {
+    what: &'static str,
+    example: &'static str,
+    zero: bool,
+}
+
+impl Visitor<'_> for AmountVisitor {
+    type Value = Option<Amount>;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(
+            f,
+            "{} as a number or a fraction such as {}",
+            self.what, self.example
+        )
     }
+    fn visit_unit<E: de::Error>(self) -> Result<Self::Value, E> {
+        Ok(None)
+    }
+    fn visit_f64<E: de::Error>(self, v: f64) -> Result<Self::Value, E> {
+        Ok(Some(Amount::Number(v)))
+    }
+    fn visit_u64<E: de::Error>(self, v: u64) -> Result<Self::Value, E> {
+        Ok(Some(Amount::Number(v as f64)))
+    }
+    fn visit_i64<E: de::Error>(self, v: i64) -> Result<Self::Value, E> {
+        Ok(Some(Amount::Number(v as f64)))
+    }
+    fn visit_str<E: de::Error>(self, s: &str) -> Result<Self::Value, E> {
+        match fraction(s).filter(|&(num, _)| self.zero || num > 0) {
+            Some((num, den)) => Ok(Some(Amount::Fraction(num, den))),
+            None => Err(E::custom(format!(
+                "expected {} as a number or a fraction of whole numbers such as {} (got `{s}`)",
+                self.what, self.example
+            ))),
+        }
+    }
+}
+
+/// `NUM/DEN` in whole numbers, DEN above 0: how `fps` and key times are written as fractions.
+fn fraction(s: &str) -> Option<(u64, u64)> {
+    let whole = |t: &str| t.trim().parse::<u64>().ok();
+    let (num, den) = s.split_once('/')?;
+    Some((whole(num)?, whole(den).filter(|&d| d > 0)?))
 }

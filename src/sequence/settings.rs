@@ -278,6 +278,9 @@ pub(crate) fn output_pattern(output: &str, last_frame: u64) -> Result<Pattern, S
     }
     match pattern.extension().as_str() {
         "png" | "exr" => Ok(pattern),
+        "" => Err(format!(
+            "`{output}` has no file type; add .png or .exr (e.g. `{output}.png`)"
+        )),
         other => Err(format!(
             "unsupported file type `.{other}`; frames are .png or .exr (got `{output}`)"
         )),

@@ -46,8 +46,13 @@ pub(super) fn timeline(
             format!("must be at most {MAX_FIRST_FRAME} {}", got(first_frame)),
         );
     }
-    let path = path(t, camera)?;
-    let duration = match (&path, t.duration) {
+    let mut clock = Clock {
+        first_frame,
+        fraction,
+        duration: None,
+    };
+    let path = path(t, camera, (&clock, fps))?;
+    clock.duration = match (&path, t.duration) {
         (_, Some(d)) => Some(d),
         (TimelinePath::Orbit(o), None) => Some(o.duration),
         (TimelinePath::Keys(k), None) => k.keys.last().map(|k| k.time),
@@ -56,11 +61,7 @@ pub(super) fn timeline(
         fps,
         frame_count: frame_count(t, &path, fps)?,
         path,
-        clock: Clock {
-            first_frame,
-            fraction,
-            duration,
-        },
+        clock,
     };
     let warnings = t
         .duration
@@ -75,7 +76,10 @@ pub(super) fn timeline(
     })
 }
 
-fn path(t: &raw::Timeline, camera: Option<Key>) -> Check<TimelinePath> {
+/// The clock's frame numbers and rate, for keys given by `frame:`.
+type Frames<'a> = (&'a Clock, f64);
+
+fn path(t: &raw::Timeline, camera: Option<Key>, frames: Frames) -> Check<TimelinePath> {
     match (&t.keyframes, &t.orbit) {
         (Some(_), Some(_)) => invalid(
             "timeline.orbit",
@@ -84,7 +88,7 @@ fn path(t: &raw::Timeline, camera: Option<Key>) -> Check<TimelinePath> {
         (None, None) => invalid("timeline", "needs `keyframes:` or `orbit:`"),
         (Some(keys), None) => Ok(TimelinePath::Keys(Box::new(keyed(
             t,
-            keyframes(keys, camera)?,
+            keyframes(keys, camera, frames)?,
         )?))),
         (None, Some(_)) if t.speed.is_some() => invalid(
             "timeline.speed",
@@ -205,19 +209,19 @@ fn unseen_keys(t: &Timeline, duration: f64) -> Vec<String> {
     )]
 }
 
-fn keyframes(keys: &[raw::Keyframe], camera: Option<Key>) -> Check<Vec<Key>> {
+fn keyframes(keys: &[raw::Keyframe], camera: Option<Key>, frames: Frames) -> Check<Vec<Key>> {
     if keys.is_empty() {
         return invalid("timeline.keyframes", "needs at least one keyframe");
     }
     let mut out: Vec<Key> = Vec::with_capacity(keys.len());
     for (i, k) in keys.iter().enumerate() {
         let path = format!("timeline.keyframes[{i}]");
-        let time = number(&format!("{path}.time"), k.time)?;
+        let (time, field) = key_time(&path, k, frames)?;
         if let Some(prev) = out.last()
             && time <= prev.time
         {
             return invalid(
-                format!("{path}.time"),
+                format!("{path}.{field}"),
                 format!(
                     "keyframe times must increase strictly; keyframe {} is at {} {}",
                     i - 1,
@@ -246,6 +250,38 @@ fn keyframes(keys: &[raw::Keyframe], camera: Option<Key>) -> Check<Vec<Key>> {
         });
     }
     Ok(out)
+}
+
+/// A key's time in seconds, and the field that gave it: `time:` as a number, or a fraction
+/// divided once in f64; or `frame:`, at exactly the time that frame shows (`Clock::time_of`).
+fn key_time(path: &str, k: &raw::Keyframe, (clock, fps): Frames) -> Check<(f64, &'static str)> {
+    let time = match (k.time, k.frame) {
+        (Some(_), Some(_)) => {
+            return invalid(
+                format!("{path}.frame"),
+                "give either `time:` (seconds) or `frame:` (a frame number), not both",
+            );
+        }
+        (None, None) => {
+            return invalid(
+                path,
+                "needs `time:` (seconds, e.g. 2.5 or 71/24) or `frame:` (a frame number)",
+            );
+        }
+        (Some(raw::Amount::Number(s)), None) => s,
+        (Some(raw::Amount::Fraction(num, den)), None) => num as f64 / den as f64,
+        (None, Some(n)) if n < clock.first_frame => {
+            return invalid(
+                format!("{path}.frame"),
+                format!(
+                    "frame {n} is before the first frame, timeline.first_frame ({})",
+                    clock.first_frame
+                ),
+            );
+        }
+        (None, Some(n)) => return Ok((clock.time_of(n, fps), "frame")),
+    };
+    Ok((number(&format!("{path}.time"), time)?, "time"))
 }
 
 /// A key's pose: given values, else the previous key's, else `camera:`'s. Ups are unit vectors

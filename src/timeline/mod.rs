@@ -125,6 +125,18 @@ pub struct Clock {
     pub(crate) duration: Option<f64>,
 }
 
+impl Clock {
+    /// The time frame `n` shows at `fps` (see `Clock`); a key given by frame number is placed
+    /// at exactly this time, so it falls on its frame bit for bit.
+    pub(crate) fn time_of(&self, n: u64, fps: f64) -> f64 {
+        let i = n.saturating_sub(self.first_frame) as f64;
+        match self.fraction {
+            Some((num, den)) => (i * den as f64) / num as f64,
+            None => i / fps,
+        }
+    }
+}
+
 /// A key may end this much of a frame after the frame that shows it (rounding in t × fps).
 const FRAME_SLACK: f64 = 1e-6;
 
@@ -242,11 +254,7 @@ impl Timeline {
 
     /// The time frame `n` shows, exact for any n (no accumulation): see `Clock`.
     pub fn time_of(&self, n: u64) -> f64 {
-        let i = n.saturating_sub(self.clock.first_frame) as f64;
-        match self.clock.fraction {
-            Some((num, den)) => (i * den as f64) / num as f64,
-            None => i / self.fps,
-        }
+        self.clock.time_of(n, self.fps)
     }
 
     /// The number of the first frame.
