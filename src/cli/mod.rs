@@ -209,6 +209,10 @@ pub struct JobArgs {
     /// render.precision).
     #[arg(long, value_enum)]
     pub(crate) precision: Option<crate::settings::Precision>,
+    /// Compositing passes as extra EXR channels, e.g. normal,albedo,id,motion,position (added
+    /// to render.aov).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "PASSES")]
+    pub(crate) aov: Vec<crate::settings::Aov>,
 }
 
 /// `render`'s options; `status` takes them too and ignores those that only shape a run.

@@ -30,7 +30,7 @@ pub(crate) use timeline::MAX_FIRST_FRAME;
 
 use crate::camera::{Camera, Degenerate, Pose};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
-use crate::settings::{Adaptive, Sampler, Settings};
+use crate::settings::{Adaptive, Aovs, Sampler, Settings};
 use crate::shutter::Shutter;
 use crate::timeline::{Ease, Key, Timeline};
 use glam::DVec3;
