@@ -1,6 +1,6 @@
 //! Compositing passes (`--aov`, `render.aov`) through the binary: the channels compositors
 //! look for, their values on known geometry, motion against known camera moves, the same bytes
-//! from every kernel and thread count, the refusals and resume.
+//! from every kernel and thread count, the refusals, resume, and `camera --format chan`.
 
 mod common;
 use common::*;
@@ -341,4 +341,34 @@ fn a_change_of_passes_makes_frames_stale_and_the_same_passes_keep_them() {
     render_ok(&tmp, &["-o", "plain.exr"]);
     let out = run_in(&tmp, &["status", "s.yaml", "-o", "plain.exr"]);
     assert_eq!(out.status.code(), Some(0));
+}
+
+#[test]
+fn chan_files_hold_nukes_columns() {
+    let yaml = wall(
+        "    - { time: 0, position: [0, 1, 5], look_at: [0, 1, 0] }
+    - { time: 1, position: [0, 1, 5], look_at: [-5, 1, 5] }",
+    );
+    let tmp = scene("aov-chan", &yaml);
+    let out = run_in(&tmp, &["camera", "s.yaml", "--format", "chan"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<Vec<f64>> = (text.lines())
+        .map(|l| l.split(' ').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(lines.len(), 25);
+    assert!(lines.iter().all(|l| l.len() == 8));
+    let vfov = 2.0 * (25.0f64 / 33.0).atan().to_degrees();
+    let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-9);
+    // Looking down -z: no rotation. Looking down -x: a pan of +90 degrees about y.
+    assert!(
+        close(&lines[0], &[0.0, 0.0, 1.0, 5.0, 0.0, 0.0, 0.0, vfov]),
+        "{:?}",
+        lines[0]
+    );
+    assert!(
+        close(&lines[24], &[24.0, 0.0, 1.0, 5.0, 0.0, 90.0, 0.0, vfov]),
+        "{:?}",
+        lines[24]
+    );
 }

@@ -84,6 +84,8 @@ pub struct CameraArgs {
 pub(crate) enum CameraFormat {
     Csv,
     Json,
+    /// Nuke's channel file: `frame tx ty tz rx ry rz vfov`, rotations in degrees, order ZXY.
+    Chan,
 }
 
 #[derive(Debug, Args)]
