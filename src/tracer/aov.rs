@@ -21,6 +21,9 @@ use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+/// Rows whose records are computed together before they go to the channels.
+const BAND_ROWS: usize = 64;
+
 /// What one pixel's passes hold: normal, albedo, id, motion (u, v), position.
 type Record = [f32; 12];
 
@@ -52,26 +55,32 @@ pub fn render(
         return None;
     }
     let (w, h) = (settings.width, settings.height);
-    let mut records = vec![MISS; w as usize * h as usize];
-    records
-        .par_chunks_mut(w as usize)
-        .enumerate()
-        .for_each(|(row, out)| {
-            if stop.load(Ordering::Relaxed) {
-                return;
-            }
-            for (col, r) in out.iter_mut().enumerate() {
-                *r = pixel(world, (camera, next), (w, h), (row as u32, col as u32));
-            }
-        });
-    if stop.load(Ordering::Relaxed) {
-        return None;
-    }
-    let channels = settings
-        .aov
-        .iter()
+    let pixels = w as usize * h as usize;
+    let mut channels: Vec<(&'static str, usize, Vec<f32>)> = (settings.aov.iter())
         .flat_map(layout)
-        .map(|&(name, at)| (name, records.iter().map(|r| r[at]).collect()))
+        .map(|&(name, at)| (name, at, vec![0.0; pixels]))
+        .collect();
+    // A band of rows at a time, so the records in flight stay small beside the channels.
+    let band = BAND_ROWS * w as usize;
+    for first in (0..pixels).step_by(band) {
+        if stop.load(Ordering::Relaxed) {
+            return None;
+        }
+        let records: Vec<Record> = (first..pixels.min(first + band))
+            .into_par_iter()
+            .map(|i| {
+                let at = ((i / w as usize) as u32, (i % w as usize) as u32);
+                pixel(world, (camera, next), (w, h), at)
+            })
+            .collect();
+        for (_, at, values) in &mut channels {
+            for (v, r) in values[first..].iter_mut().zip(&records) {
+                *v = r[*at];
+            }
+        }
+    }
+    let channels = (channels.into_iter())
+        .map(|(name, _, values)| (name, values))
         .collect();
     Some(Passes {
         channels,
