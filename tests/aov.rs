@@ -315,6 +315,8 @@ fn passes_need_exr_files() {
     let yaml = SCENE.replace("samples: 4 }", "samples: 4, aov: [normal, id] }");
     std::fs::write(tmp.join("s.yaml"), &yaml).unwrap();
     refused(&["-o", "f.png"], "render.aov");
+    let out = run_in(&tmp, &["check", "s.yaml"]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains(", passes normal,id\n"));
     // EXR files beside a stream carry them.
     let out = run_in(
         &tmp,
