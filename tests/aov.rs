@@ -374,3 +374,52 @@ fn chan_files_hold_nukes_columns() {
         lines[24]
     );
 }
+
+#[test]
+fn meshes_and_textures_give_their_own_normals_and_colours() {
+    let tmp = scratch("aov-examples");
+    let repo = repo();
+    for name in ["mesh", "checker"] {
+        let file = repo.join(format!("sequences/{name}.yaml"));
+        let pattern = format!("{name}_####.exr");
+        let out = run_in(
+            &tmp,
+            &[
+                "render",
+                file.to_str().unwrap(),
+                "-q",
+                "--frames",
+                "0",
+                "--size",
+                "48x27",
+                "-o",
+                &pattern,
+                "--aov",
+                ALL,
+            ],
+        );
+        assert!(out.status.success(), "{name}: {}", stderr(&out));
+    }
+    // Mesh normals are unit length where something is hit, 0 elsewhere.
+    let img = read_exr(&tmp.join("mesh_0000.exr"));
+    let ids = channel(&img, "objectId");
+    let n = ["N.X", "N.Y", "N.Z"].map(|c| channel(&img, c));
+    assert!(ids.contains(&0.0), "the mesh is in view");
+    for (i, &id) in ids.iter().enumerate() {
+        let len = n
+            .iter()
+            .map(|c| f64::from(c[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        match id {
+            -1.0 => assert_eq!(len, 0.0),
+            _ => assert!((len - 1.0).abs() < 1e-6, "pixel {i}: |N| = {len}"),
+        }
+    }
+    // A checker texture's albedo takes both its colours.
+    let red = channel(&read_exr(&tmp.join("checker_0000.exr")), "albedo.R");
+    let (lo, hi) = red
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    assert!(hi - lo > 0.5, "albedo.R from {lo} to {hi}");
+}
