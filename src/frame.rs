@@ -15,6 +15,8 @@ pub struct Frame {
     /// Coverage (alpha) when asked for: then `rgb` is premultiplied, eye rays that miss
     /// having added nothing.
     pub(crate) alpha: Option<Vec<f32>>,
+    /// Compositing passes (`render.aov`), when asked for; `tracer::aov` fills them in.
+    pub aov: Option<Passes>,
     /// How integer values encode the colour.
     pub(crate) encoding: Encoding,
     /// Colour values the tracer produced as NaN or beyond f32 and that were replaced before
@@ -24,6 +26,16 @@ pub struct Frame {
     pub samples: u64,
     /// All rays cast for the colour: eye, shadow and reflection rays.
     pub rays: u64,
+}
+
+/// A frame's compositing passes: each channel's name and its f32 values (row-major from the
+/// top left), in the order of `settings::Aov::ALL`, and the table of object ids.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Passes {
+    pub channels: Vec<(&'static str, Vec<f32>)>,
+    /// One line per object of `objects:`, `ID KIND` (and a mesh's file name): what
+    /// `objectId` values mean.
+    pub objects: String,
 }
 
 impl Frame {
@@ -194,6 +206,7 @@ mod tests {
             rgb: vec![0.0, 0.5, 1.0, -3.0, 7.0, 0.2],
             depth: None,
             alpha: None,
+            aov: None,
             encoding: Encoding::Linear,
             non_finite: 0,
             samples: 2,
@@ -217,6 +230,7 @@ mod tests {
                 rgb: rgb.clone(),
                 depth: None,
                 alpha: None,
+                aov: None,
                 encoding,
                 non_finite: 0,
                 samples: 0,

@@ -67,7 +67,7 @@ pub(crate) fn plan(seq: &Sequence, frames: &FrameSet, files: &Files, force: bool
             .par_iter()
             .map(|&n| {
                 let ours = |f: &str| {
-                    let view = FrameView::of_frame(&seq.timeline, seq.settings.shutter, n);
+                    let view = FrameView::for_settings(&seq.timeline, &seq.settings, n);
                     f == identity.fingerprint(&view)
                 };
                 match output::inspect(&files.frame_path(n), &expected) {

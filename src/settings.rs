@@ -30,6 +30,8 @@ pub struct Settings {
     /// The arithmetic of the lanes: f64 (the reference) or f32 (twice the lanes per
     /// instruction, camera-relative coordinates).
     pub precision: Precision,
+    /// Compositing passes written beside the colour (`render.aov`, `--aov`); none by default.
+    pub aov: Aovs,
 }
 
 /// The float type the tracer's lanes compute in (`render.precision`, `--precision`).
@@ -68,7 +70,82 @@ impl std::fmt::Debug for Settings {
             .field("exposure", &self.exposure)
             .field("encoding", &self.encoding)
             .field("precision", &self.precision)
+            .field("aov", &self.aov)
             .finish()
+    }
+}
+
+/// One compositing pass (AOV): extra EXR channels computed at each pixel centre's first hit
+/// (`tracer::aov`, docs/spec/output.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Aov {
+    /// World-space shading normal, facing the camera: `N.X`, `N.Y`, `N.Z`.
+    Normal,
+    /// Diffuse colour of the surface (its texture's where it has one): `albedo.R/G/B`.
+    Albedo,
+    /// The object's index in `objects:` (−1 for background): `objectId`.
+    Id,
+    /// Where the surface point is one frame later minus where it is now, in pixels:
+    /// `forward.u`, `forward.v` (Nuke's convention, v up).
+    Motion,
+    /// World-space position of the hit: `P.X`, `P.Y`, `P.Z`.
+    Position,
+}
+
+impl Aov {
+    pub const ALL: [Aov; 5] = [
+        Aov::Normal,
+        Aov::Albedo,
+        Aov::Id,
+        Aov::Motion,
+        Aov::Position,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Aov::Normal => "normal",
+            Aov::Albedo => "albedo",
+            Aov::Id => "id",
+            Aov::Motion => "motion",
+            Aov::Position => "position",
+        }
+    }
+}
+
+/// A set of passes, in the fixed order of `Aov::ALL` whatever order they were asked in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Aovs(u8);
+
+impl Aovs {
+    /// The passes of `list` (repeats count once).
+    pub fn of(list: &[Aov]) -> Aovs {
+        list.iter().fold(Aovs::default(), |s, &a| s.with(a))
+    }
+
+    pub fn with(self, a: Aov) -> Aovs {
+        Aovs(self.0 | 1 << a as u8)
+    }
+
+    pub fn union(self, o: Aovs) -> Aovs {
+        Aovs(self.0 | o.0)
+    }
+
+    pub fn has(self, a: Aov) -> bool {
+        self.0 >> a as u8 & 1 == 1
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// One bit per pass, bit i for `Aov::ALL[i]` (what the fingerprint records).
+    pub fn bits(self) -> u8 {
+        self.0
+    }
+
+    pub fn iter(self) -> impl Iterator<Item = Aov> {
+        Aov::ALL.into_iter().filter(move |&a| self.has(a))
     }
 }
 

@@ -7,6 +7,7 @@ use super::{BitDepth, JobArgs, RenderArgs, ShardSpec, resolve_shard};
 use crate::frameset::FrameSet;
 use crate::output::{FileFormat, Files};
 use crate::sequence::{self, LoadError, Quality, Sequence, output_pattern};
+use crate::settings::Aovs;
 
 /// Why the arguments make no job: the file is wrong, or the command line asks for something
 /// impossible (both exit 2).
@@ -88,6 +89,12 @@ impl Job {
                 seq.output
             )));
         }
+        if !seq.settings.aov.is_empty() && !exr {
+            return Err(JobError::Usage(format!(
+                "--aov (render.aov) writes its passes as extra EXR channels; `{}` is not .exr (use a pattern such as frame_####.exr)",
+                seq.output
+            )));
+        }
         Ok(Files { pattern, format })
     }
 
@@ -100,6 +107,11 @@ impl Job {
             true => Some(self.files(&args.job)?),
             false => None,
         };
+        if files.is_none() && !self.seq.settings.aov.is_empty() {
+            return Err(JobError::Usage(
+                "--aov (render.aov) writes its passes as extra EXR channels, which the --pipe stream cannot carry; add -o frame_####.exr to write EXR files beside the stream".into(),
+            ));
+        }
         if args.claim && (files.is_none() || args.pipe.is_some()) {
             return Err(JobError::Usage(
                 "--claim shares frame files between processes; it cannot be combined with --pipe"
@@ -148,6 +160,7 @@ fn apply(seq: &mut Sequence, o: &JobArgs) -> Result<(), JobError> {
     }
     seq.settings.depth |= o.depth;
     seq.settings.alpha |= o.alpha;
+    seq.settings.aov = seq.settings.aov.union(Aovs::of(&o.aov));
     if let Some(e) = o.encoding {
         seq.settings.encoding = e;
     }

@@ -85,6 +85,8 @@ pub struct CameraArgs {
 pub(crate) enum CameraFormat {
     Csv,
     Json,
+    /// Nuke's channel file: `frame tx ty tz rx ry rz vfov`, rotations in degrees, order ZXY.
+    Chan,
 }
 
 #[derive(Debug, Args)]
@@ -210,6 +212,10 @@ pub struct JobArgs {
     /// render.precision).
     #[arg(long, value_enum)]
     pub(crate) precision: Option<crate::settings::Precision>,
+    /// Compositing passes as extra EXR channels, e.g. normal,albedo,id,motion,position (added
+    /// to render.aov).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "PASSES")]
+    pub(crate) aov: Vec<crate::settings::Aov>,
 }
 
 /// `render`'s options; `status` takes them too and ignores those that only shape a run.

@@ -1,9 +1,10 @@
-//! `rayreel camera FILE [--format csv|json] [--frames SPEC]`: every frame's camera on stdout,
-//! for compositing tools and for checking a path by numbers. Numbers are printed in their
-//! shortest form that reads back as the same f64, so a still camera given a printed pose
-//! renders that frame exactly.
+//! `rayreel camera FILE [--format csv|json|chan] [--frames SPEC]`: every frame's camera on
+//! stdout, for compositing tools and for checking a path by numbers. Numbers are printed in
+//! their shortest form that reads back as the same f64, so a still camera given a printed pose
+//! renders that frame exactly. `chan` is Nuke's channel file (`chan`, below).
 
 use super::{Error, print_warnings};
+use crate::camera::{Camera, Pose};
 use crate::cli::{CameraArgs, CameraFormat};
 use crate::sequence::{self, Sequence};
 use glam::DVec3;
@@ -55,6 +56,7 @@ fn line(seq: &Sequence, n: u64, format: CameraFormat) -> String {
                 pose.fov
             )
         }
+        CameraFormat::Chan => chan(n, &pose, seq.settings.width, seq.settings.height),
         CameraFormat::Json => {
             let v = |v: DVec3| format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z);
             format!(
@@ -64,6 +66,87 @@ fn line(seq: &Sequence, n: u64, format: CameraFormat) -> String {
                 v(up),
                 pose.fov
             )
+        }
+    }
+}
+
+/// Frame n as a line of Nuke's channel file: `frame tx ty tz rx ry rz vfov`. Translation is
+/// the camera position; rotations are Euler angles in degrees for Nuke's default order ZXY
+/// (world_from_camera = Ry·Rx·Rz, column vectors: roll about z first, then tilt about x, then
+/// pan about y), of the camera frame whose columns are right, up and −forward (Nuke's camera,
+/// like rayreel's, is y up and looks down −z); vfov is the vertical field of view in degrees
+/// for the file's render size. A pose whose camera cannot be built (never rendered) prints
+/// zero rotations.
+fn chan(n: u64, pose: &Pose, width: u32, height: u32) -> String {
+    let [rx, ry, rz] = match Camera::new(pose) {
+        Ok(c) => zxy_degrees(c.forward, c.up),
+        Err(_) => [0.0; 3],
+    };
+    let s = libm::tan(pose.fov.to_radians() * 0.5) * f64::from(height) / f64::from(width);
+    let vfov = (2.0 * libm::atan(s)).to_degrees();
+    let p = pose.position;
+    format!(
+        "{n} {:?} {:?} {:?} {rx:?} {ry:?} {rz:?} {vfov:?}",
+        p.x, p.y, p.z
+    )
+}
+
+/// Euler angles (rx, ry, rz) in degrees with Ry(ry)·Rx(rx)·Rz(rz) = [right, up, −forward]:
+/// rx = asin(forward.y) (tilt), ry = atan2(−forward.x, −forward.z) (pan), and rz (roll) from
+/// where `up` lies in the plane the pan and tilt leave it. Looking straight up or down, the
+/// pan is 0 and the roll takes the rest.
+pub(crate) fn zxy_degrees(forward: DVec3, up: DVec3) -> [f64; 3] {
+    let rx = libm::asin(forward.y.clamp(-1.0, 1.0));
+    let ry = libm::atan2(-forward.x, -forward.z);
+    let (sx, cx, sy, cy) = (libm::sin(rx), libm::cos(rx), libm::sin(ry), libm::cos(ry));
+    // Rz·ŷ = (−sin rz, cos rz, 0) in the frame Ry·Rx leaves: its x and y axes in world space.
+    let x_axis = DVec3::new(cy, 0.0, -sy);
+    let y_axis = DVec3::new(sx * sy, cx, sx * cy);
+    let rz = libm::atan2(-up.dot(x_axis), up.dot(y_axis));
+    [rx, ry, rz].map(f64::to_degrees)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DMat3;
+
+    #[test]
+    fn zxy_angles_rebuild_the_camera_frame() {
+        let cases = [
+            (DVec3::new(0.0, 0.0, 1.0), DVec3::ZERO, DVec3::Y),
+            (
+                DVec3::new(3.0, 2.0, -1.0),
+                DVec3::new(0.5, -1.0, 4.0),
+                DVec3::Y,
+            ),
+            (
+                DVec3::new(-2.0, 5.0, 0.3),
+                DVec3::ZERO,
+                DVec3::new(0.3, 1.0, -0.2),
+            ),
+            (DVec3::new(0.0, 4.0, 0.0), DVec3::ZERO, DVec3::Z),
+        ];
+        for (position, look_at, up) in cases {
+            let pose = Pose {
+                position,
+                look_at,
+                up,
+                fov: 60.0,
+            };
+            let c = Camera::new(&pose).unwrap();
+            let [rx, ry, rz] = zxy_degrees(c.forward, c.up).map(f64::to_radians);
+            let m = DMat3::from_rotation_y(ry)
+                * DMat3::from_rotation_x(rx)
+                * DMat3::from_rotation_z(rz);
+            let (rot, _) = c.world_from_camera();
+            for (a, b) in [
+                (m.x_axis, rot.x_axis),
+                (m.y_axis, rot.y_axis),
+                (m.z_axis, rot.z_axis),
+            ] {
+                assert!((a - b).length() < 1e-12, "{position}: {a} vs {b}");
+            }
         }
     }
 }

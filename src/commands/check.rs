@@ -277,7 +277,8 @@ fn frames(t: &Timeline) -> String {
     )
 }
 
-/// The `picture:` line: sampling, encoding, exposure and alpha, what decides how frames look.
+/// The `picture:` line: sampling, encoding, exposure, alpha and compositing passes, what
+/// decides how frames look.
 pub(super) fn picture(s: &Settings) -> String {
     let sampling = match s.adaptive {
         Some(a) => format!(
@@ -287,8 +288,13 @@ pub(super) fn picture(s: &Settings) -> String {
         None => noun(f64::from(s.samples), "sample"),
     };
     let alpha = if s.alpha { ", alpha" } else { "" };
+    let passes: Vec<&str> = s.aov.iter().map(|a| a.name()).collect();
+    let passes = match passes.is_empty() {
+        true => String::new(),
+        false => format!(", passes {}", passes.join(",")),
+    };
     format!(
-        "{sampling}, {}, exposure {}{alpha}",
+        "{sampling}, {}, exposure {}{alpha}{passes}",
         s.encoding.name(),
         s.exposure
     )

@@ -45,6 +45,10 @@ pub(crate) fn encode(
     if let Some(depth) = &frame.depth {
         channels.push(AnyChannel::new("Z", FlatSamples::F32(depth.clone())));
     }
+    // Passes are always 32-bit: ids, positions and motion must be exact.
+    for (name, values) in frame.aov.iter().flat_map(|p| &p.channels) {
+        channels.push(AnyChannel::new(*name, FlatSamples::F32(values.clone())));
+    }
     let mut attributes = LayerAttributes {
         frames_per_second: Some(meta.fps),
         ..LayerAttributes::default()
@@ -59,6 +63,12 @@ pub(crate) fn encode(
         AttributeValue::I32(i32::try_from(meta.frame).unwrap_or(i32::MAX)),
     );
     other.insert(Text::from("rayreel:time"), AttributeValue::F64(meta.time));
+    if let Some(passes) = frame.aov.as_ref().filter(|p| has_ids(p)) {
+        other.insert(
+            Text::from(OBJECTS_KEY),
+            AttributeValue::Text(Text::from(passes.objects.as_str())),
+        );
+    }
     if let Some([to_camera, to_ndc]) = meta.matrices {
         // glam's columns are the rows OpenEXR stores (row vectors).
         attributes.world_to_camera = Some(to_camera.to_cols_array().map(|v| v as f32));
@@ -75,6 +85,13 @@ pub(crate) fn encode(
     let mut bytes = out.into_inner();
     sort_attributes(&mut bytes)?;
     Ok((bytes, clamped.get()))
+}
+
+/// The header attribute holding the table of object ids (`tracer::aov::objects`).
+pub(crate) const OBJECTS_KEY: &str = "rayreel:objectIds";
+
+fn has_ids(p: &crate::frame::Passes) -> bool {
+    p.channels.iter().any(|c| c.0 == "objectId")
 }
 
 /// The exr crate writes custom attributes in hash-map order, which differs from process to

@@ -101,6 +101,11 @@ pub(crate) fn of_frame(run: &Hasher, view: &FrameView, exr_time: bool) -> String
     if exr_time {
         view.time.canon(&mut h);
     }
+    // Only with the motion pass, whose run part already differs (`Settings`).
+    if let Some(next) = &view.next {
+        h.write(b"next camera");
+        next.canon(&mut h);
+    }
     h.hex()
 }
 
@@ -375,6 +380,7 @@ impl Canon for Settings {
             exposure,
             encoding,
             precision,
+            aov,
         } = self;
         let fields: [&dyn Canon; 6] = [width, height, max_depth, depth, samples, adaptive];
         fields.iter().for_each(|f| f.canon(h));
@@ -393,6 +399,10 @@ impl Canon for Settings {
         // which no file-format tag (0, 1) that follows the settings takes.
         if *precision == Precision::F32 {
             h.write(&[2]);
+        }
+        // Optional too: passes add the byte 3 and their bits, a tag nothing else here takes.
+        if !aov.is_empty() {
+            h.write(&[3, aov.bits()]);
         }
     }
 }
@@ -470,6 +480,7 @@ mod tests {
             exposure: 0.0,
             encoding: Encoding::Srgb,
             precision: Precision::F64,
+            aov: Default::default(),
         };
         let scene = Scene {
             objects: Vec::new(),
@@ -539,6 +550,18 @@ mod tests {
         bytes.insert(n - 2, 2);
         assert_eq!(
             of_run(&scene, &f32, &png).hex(),
+            Hasher::new().write(&bytes).hex()
+        );
+        // Compositing passes append the byte 3 and their bits after that.
+        use crate::settings::{Aov, Aovs};
+        let passes = Settings {
+            aov: Aovs::of(&[Aov::Motion, Aov::Normal]),
+            ..f32
+        };
+        let n = bytes.len();
+        bytes.splice(n - 2..n - 2, [3, 0b01001]);
+        assert_eq!(
+            of_run(&scene, &passes, &png).hex(),
             Hasher::new().write(&bytes).hex()
         );
     }

@@ -19,7 +19,7 @@ use crate::output::{EncodeError, Files, RunIdentity, stream::StreamFormat};
 use crate::progress::Progress;
 use crate::sequence::Sequence;
 use crate::settings::Settings;
-use crate::shutter::Exposure;
+use crate::shutter::FrameView;
 use crate::tracer::{self, World};
 use delivery::Delivery;
 use std::io::Write;
@@ -214,9 +214,19 @@ pub(crate) fn render_with(
     n: u64,
     settings: &Settings,
 ) -> Result<Frame, RunError> {
-    let exposure = Exposure::of_frame(&seq.timeline, settings.shutter, n)
-        .map_err(|source| RunError::Camera { frame: n, source })?;
-    Ok(tracer::render(world, &exposure, settings, n))
+    let view = FrameView::for_settings(&seq.timeline, settings, n);
+    let exposure =
+        (view.exposure.as_ref()).map_err(|&source| RunError::Camera { frame: n, source })?;
+    let mut frame = tracer::render(world, exposure, settings, n);
+    let never = std::sync::atomic::AtomicBool::new(false);
+    frame.aov = tracer::aov::render(
+        world,
+        &exposure.camera,
+        view.next.as_ref(),
+        settings,
+        &never,
+    );
+    Ok(frame)
 }
 
 /// Frame buffers are large and short-lived. glibc raises its mmap threshold after the first

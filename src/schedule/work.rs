@@ -33,12 +33,17 @@ pub(super) fn produce(
 ) -> Produced {
     let start = Instant::now();
     let n = task.frame;
-    let view = FrameView::of_frame(&seq.timeline, seq.settings.shutter, n);
+    let view = FrameView::for_settings(&seq.timeline, &seq.settings, n);
     let exposure =
         (view.exposure.as_ref()).map_err(|&source| RunError::Camera { frame: n, source })?;
-    let Some(frame) = tracer::render_or_stop(world, exposure, &seq.settings, n, cancel) else {
+    let Some(mut frame) = tracer::render_or_stop(world, exposure, &seq.settings, n, cancel) else {
         return Ok(None);
     };
+    let next = view.next.as_ref();
+    frame.aov = tracer::aov::render(world, &exposure.camera, next, &seq.settings, cancel);
+    if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+        return Ok(None);
+    }
     let (file, clamped) = match files.filter(|_| task.write_file) {
         Some((files, identity)) => {
             let meta = identity.meta(&view);

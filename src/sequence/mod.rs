@@ -30,7 +30,7 @@ pub(crate) use timeline::MAX_FIRST_FRAME;
 
 use crate::camera::{Camera, Degenerate, Pose};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};
-use crate::settings::{Adaptive, Sampler, Settings};
+use crate::settings::{Adaptive, Aovs, Sampler, Settings};
 use crate::shutter::Shutter;
 use crate::timeline::{Ease, Key, Timeline};
 use glam::DVec3;
@@ -40,8 +40,8 @@ use std::path::{Path, PathBuf};
 
 /// Largest width or height accepted, in pixels.
 pub(crate) const MAX_DIMENSION: u64 = 16384;
-/// Largest width × height: a frame in flight takes 12 bytes a pixel (16 with depth), and a
-/// run keeps a few in flight.
+/// Largest width × height: a frame in flight takes 12 bytes a pixel (16 with depth, up to 48
+/// more with every compositing pass), and a run keeps a few in flight.
 pub(crate) const MAX_PIXELS: u64 = 1 << 26;
 /// Largest number of objects in a scene.
 pub(crate) const MAX_OBJECTS: usize = 1_000_000;

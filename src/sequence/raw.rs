@@ -41,6 +41,7 @@ pub struct Render {
     pub shutter: Option<f64>,
     pub shutter_offset: Option<f64>,
     pub precision: Option<crate::settings::Precision>,
+    pub aov: Option<Vec<crate::settings::Aov>>,
 }
 
 #[derive(Debug, Deserialize)]

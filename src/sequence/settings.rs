@@ -60,6 +60,7 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<(Settings, Explicit)> {
         },
         encoding: r.encoding.unwrap_or_default(),
         precision: r.precision.unwrap_or_default(),
+        aov: Aovs::of(r.aov.as_deref().unwrap_or_default()),
     };
     if r.quality.is_none() && r.samples.is_none() && r.adaptive.is_none() {
         default_sampling(&mut s);

@@ -6,6 +6,7 @@
 //! count, order of work or lane width.
 
 pub mod accel;
+pub mod aov;
 mod area;
 pub(crate) mod bvh;
 pub mod glass;
@@ -272,6 +273,7 @@ fn render_frame(
         rgb,
         depth,
         alpha,
+        aov: None,
         encoding: settings.encoding,
         non_finite: stats.non_finite,
         samples: stats.samples,

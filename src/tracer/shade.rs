@@ -11,7 +11,7 @@ use super::accel::{Nearest, Rays};
 use super::path::LightSeeds;
 use super::polygon::MeshLanes;
 use super::texture::{self, At};
-use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
+use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{Intensity, Light, Material, Shape};
 use glam::DVec3;
 
@@ -118,6 +118,27 @@ pub(super) fn shade_hit<'a, V: Lanes>(
         entering,
         local,
     }
+}
+
+/// One ray's first surface as the compositing passes see it (`aov`): the shading normal
+/// turned to face the ray (a mesh's interpolated one) and the diffuse colour (a texture's,
+/// filtered over the cone width `width`, where the material has one). No light is computed.
+pub(super) fn first_surface(
+    world: &World,
+    ray: &Rays<F64x1>,
+    hit: &Nearest<F64x1>,
+    width: Option<F64x1>,
+) -> (DVec3, DVec3) {
+    let mut surface = Surface::gather(world, hit);
+    let point = ray.origin + ray.dir * hit.t;
+    let (mut normal, entering) = surface.normal(point, ray.dir);
+    if let Some(m) = MeshLanes::of(world, hit, point) {
+        normal = m.facing(ray.dir, normal, entering).0;
+    }
+    if let Some(width) = width {
+        surface.paint(world, hit, (point, normal, ray.dir), width);
+    }
+    (normal.lane(0), surface.diffuse.lane(0))
 }
 
 impl<V: Lanes> Shaded<'_, V> {
