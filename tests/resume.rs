@@ -46,20 +46,9 @@ fn killed_at_any_moment_resumes_to_the_identical_sequence() {
         .iter()
         .enumerate()
     {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_rayreel"))
-            .args([
-                "render",
-                "seq.yaml",
-                "-o",
-                "out/f_####.png",
-                "--threads",
-                if i % 2 == 0 { "2" } else { "1" },
-            ])
-            .args(heavy)
-            .current_dir(&tmp)
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
+        let threads = if i % 2 == 0 { "2" } else { "1" };
+        let args = [&["-o", "out/f_####.png", "--threads", threads][..], &heavy].concat();
+        let mut child = start(&tmp, &args, Stdio::null());
         std::thread::sleep(Duration::from_millis(*delay_ms));
         child.kill().unwrap(); // SIGKILL
         cut_short += usize::from(!child.wait().unwrap().success());
@@ -164,21 +153,15 @@ fn editing_a_keyframe_rerenders_exactly_the_frames_it_moves() {
 fn ctrl_c_stops_cleanly_with_exit_130_and_the_rerun_finishes() {
     let tmp = setup("sigint");
     render(&tmp, &["-o", "clean/f_####.png", "--size", "640x360", "-q"]);
-    let child = Command::new(env!("CARGO_BIN_EXE_rayreel"))
-        .args([
-            "render",
-            "seq.yaml",
-            "-o",
-            "out/f_####.png",
-            "--size",
-            "640x360",
-            "--threads",
-            "1",
-        ])
-        .current_dir(&tmp)
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let args = [
+        "-o",
+        "out/f_####.png",
+        "--size",
+        "640x360",
+        "--threads",
+        "1",
+    ];
+    let child = start(&tmp, &args, Stdio::piped());
     std::thread::sleep(Duration::from_millis(150));
     // SAFETY: sends SIGINT to our own child.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
@@ -218,5 +201,69 @@ fn exr_frames_resume_too() {
     assert!(
         log.contains("6 frames: 6 stale → rendering 6"),
         "without depth the files differ: {log}"
+    );
+}
+
+/// The frame numbers of the `written` events of a `--progress json` log, in order.
+fn written_order(log: &str) -> Vec<u64> {
+    log.lines()
+        .filter(|l| l.contains("\"status\": \"written\""))
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            v["frame"].as_u64().unwrap()
+        })
+        .collect()
+}
+
+#[test]
+fn frames_are_written_in_ascending_order() {
+    let tmp = setup("order");
+    let small = "--size 96x54 --samples 4 --frames 0-23 --progress json --force";
+    for threads in ["2", "1"] {
+        let args = format!("-o out/f_####.png {small} --threads {threads}");
+        let log = render(&tmp, &args.split(' ').collect::<Vec<_>>());
+        assert_eq!(written_order(&log), (0..24).collect::<Vec<_>>());
+    }
+}
+
+/// `rayreel render seq.yaml ARGS` started in `dir`, its stderr going to `err`.
+fn start(dir: &Path, args: &[&str], err: Stdio) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_rayreel"))
+        .args(["render", "seq.yaml"])
+        .args(args)
+        .current_dir(dir)
+        .stderr(err)
+        .spawn()
+        .unwrap()
+}
+
+#[test]
+fn an_interrupted_run_leaves_a_prefix_of_its_frames() {
+    use std::io::BufRead;
+    let tmp = setup("prefix");
+    let args = "-o out/f_####.png --size 320x180 --samples 4 --progress json --threads 2";
+    let mut child = start(&tmp, &args.split(' ').collect::<Vec<_>>(), Stdio::piped());
+    let mut lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+    let mut log = String::new();
+    let mut seen = 0;
+    while seen < 3 {
+        let line = lines.next().expect("the run writes 3 frames").unwrap();
+        seen += usize::from(line.contains("\"status\": \"written\""));
+        log += &line;
+        log += "\n";
+    }
+    // SAFETY: sends SIGINT to our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    lines.for_each(|l| log += &(l.unwrap() + "\n"));
+    assert_eq!(child.wait().unwrap().code(), Some(130), "{log}");
+    let written = files(&tmp.join("out"));
+    assert!(written.len() < 49, "the interrupt came too late: {log}");
+    let prefix: Vec<String> = (0..written.len())
+        .map(|n| format!("f_{n:04}.png"))
+        .collect();
+    assert_eq!(written, prefix, "{log}");
+    assert_eq!(
+        written_order(&log),
+        (0..written.len() as u64).collect::<Vec<_>>()
     );
 }
