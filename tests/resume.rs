@@ -267,3 +267,112 @@ fn an_interrupted_run_leaves_a_prefix_of_its_frames() {
         (0..written.len() as u64).collect::<Vec<_>>()
     );
 }
+
+/// `rayreel ARGS` in `dir` with `ARGS` split at spaces: (exit code, stdout + stderr).
+fn rayreel(dir: &Path, args: &str) -> (Option<i32>, String) {
+    let out = run_in(dir, &args.split(' ').collect::<Vec<_>>());
+    let text = String::from_utf8_lossy(&out.stdout).into_owned() + &stderr(&out);
+    (out.status.code(), text)
+}
+
+/// Runs `rayreel ARGS`, which must exit with `code` and say every one of `wants`.
+fn says(dir: &Path, args: &str, code: i32, wants: &[&str]) {
+    let (got, log) = rayreel(dir, args);
+    assert_eq!(got, Some(code), "{args}: {log}");
+    let missing: Vec<&&str> = wants.iter().filter(|w| !log.contains(**w)).collect();
+    assert!(missing.is_empty(), "{args}: no {missing:?} in {log}");
+}
+
+/// The bytes of every frame file below `dir`.
+fn frame_bytes(dir: &Path) -> Vec<Vec<u8>> {
+    let names = files(dir);
+    names
+        .iter()
+        .map(|f| std::fs::read(dir.join(f)).unwrap())
+        .collect()
+}
+
+/// A scratch directory with `frames` of the test sequence rendered at 64x36 with `extra`
+/// arguments, and the job's arguments (without `extra`).
+fn rendered_small(name: &str, frames: &str, extra: &str) -> (Scratch, String) {
+    let tmp = setup(name);
+    let job = format!("seq.yaml -o out/f_####.png --size 64x36 --frames {frames}");
+    says(&tmp, &format!("render {job} {extra}"), 0, &[]);
+    (tmp, job)
+}
+
+#[test]
+fn a_rerun_at_lower_quality_keeps_the_frames_and_says_what_differs() {
+    let (tmp, job) = rendered_small("quality", "0-5", "--samples 16 --max-depth 4");
+    let finished = frame_bytes(&tmp.join("out"));
+    let lower = format!("{job} --samples 4 --max-depth 4");
+    let kept =
+        "kept 0-5 made with other quality settings (samples: 16 → 4); --force re-renders them";
+    for command in ["render", "render --dry-run", "status"] {
+        says(
+            &tmp,
+            &format!("{command} {lower}"),
+            0,
+            &["6 frames: 6 kept", kept],
+        );
+    }
+    assert_eq!(frame_bytes(&tmp.join("out")), finished);
+    // Raising every quality setting re-renders; so does --force, and a content change.
+    let raised = format!("status {job} --samples 16 --max-depth 5");
+    says(&tmp, &raised, 1, &["stale 0-5: max_depth: 4 → 5"]);
+    let forced = format!("render {lower} --force --dry-run");
+    says(&tmp, &forced, 0, &["6 stale → rendering 6 (--force)"]);
+    let exposed = format!("status {lower} --exposure 1");
+    says(
+        &tmp,
+        &exposed,
+        1,
+        &["stale 0-5: samples: 16 → 4, exposure: 0 → 1"],
+    );
+    let smaller = format!("status {job} --samples 16 --max-depth 4").replace("64x36", "32x18");
+    says(&tmp, &smaller, 1, &["stale 0-5: size: 64x36 → 32x18"]);
+    let redder = seq().replace("[0.7, 0, 0]", "[0.6, 0, 0]");
+    std::fs::write(tmp.join("seq.yaml"), redder).unwrap();
+    let same = format!("status {job} --samples 16 --max-depth 4");
+    says(&tmp, &same, 1, &["stale 0-5: materials.red"]);
+    // --skip-existing trusts any complete frame of the job's size.
+    let why = "kept 0-5 by --skip-existing (samples: 16 → 4, materials.red)";
+    let args = format!("render {lower} --skip-existing");
+    says(&tmp, &args, 0, &["6 kept → rendering 0", why]);
+    assert_eq!(frame_bytes(&tmp.join("out")), finished);
+}
+
+/// A PNG without the chunk that records its settings, as rayreel wrote them before it had one.
+fn without_record(png: &[u8]) -> Vec<u8> {
+    let mut out = png[..8].to_vec();
+    let mut at = 8;
+    while at + 12 <= png.len() {
+        let len = u32::from_be_bytes(png[at..at + 4].try_into().unwrap()) as usize;
+        let chunk = &png[at..at + 12 + len];
+        if !chunk[4..].starts_with(b"tEXtrayreel:settings\0") {
+            out.extend(chunk);
+        }
+        at += 12 + len;
+    }
+    out
+}
+
+#[test]
+fn frames_without_a_settings_record_are_rerendered_as_before() {
+    let (tmp, job) = rendered_small("older", "0-2", "--samples 16");
+    for f in files(&tmp.join("out")) {
+        let path = tmp.join("out").join(f);
+        let old = without_record(&std::fs::read(&path).unwrap());
+        std::fs::write(&path, old).unwrap();
+    }
+    // The fingerprint alone still says up to date.
+    says(
+        &tmp,
+        &format!("status {job} --samples 16"),
+        0,
+        &["3 up to date"],
+    );
+    let why = "stale 0-2: made by an older rayreel; differs: unknown";
+    let args = format!("render {job} --samples 4");
+    says(&tmp, &args, 0, &["3 stale → rendering 3", why]);
+}

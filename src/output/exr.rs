@@ -59,6 +59,10 @@ pub(crate) fn encode(
         AttributeValue::I32(i32::try_from(meta.frame).unwrap_or(i32::MAX)),
     );
     other.insert(Text::from("rayreel:time"), AttributeValue::F64(meta.time));
+    other.insert(
+        Text::from(super::record::KEY),
+        AttributeValue::Text(Text::from(meta.record.as_str())),
+    );
     if let Some([to_camera, to_ndc]) = meta.matrices {
         // glam's columns are the rows OpenEXR stores (row vectors).
         attributes.world_to_camera = Some(to_camera.to_cols_array().map(|v| v as f32));
@@ -148,9 +152,10 @@ fn attribute_at(bytes: &[u8], at: usize) -> Option<Attribute<'_>> {
     })
 }
 
-/// The fingerprint attribute of an EXR header, read from the start of a file (the header is
-/// its first few kilobytes); `None` when it is not an EXR file or has no such attribute there.
-pub(crate) fn header_fingerprint(head: &[u8]) -> Option<String> {
+/// The string attribute `key` (our fingerprint or settings record) of an EXR header, read from
+/// the start of a file (the header is its first few kilobytes); `None` when it is not an EXR
+/// file or has no such attribute there.
+pub(crate) fn header_text(head: &[u8], key: &str) -> Option<String> {
     const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
     if head.get(..4)? != MAGIC {
         return None;
@@ -161,7 +166,7 @@ pub(crate) fn header_fingerprint(head: &[u8]) -> Option<String> {
         if attribute.name.is_empty() {
             return None;
         }
-        if attribute.name == fingerprint::KEY.as_bytes() && attribute.kind == b"string" {
+        if attribute.name == key.as_bytes() && attribute.kind == b"string" {
             return Some(String::from_utf8_lossy(attribute.value).into_owned());
         }
         at = attribute.end;
