@@ -178,6 +178,8 @@ pub(crate) fn compare(old: Option<&str>, new: &str) -> Difference {
         return Difference::Unknown;
     }
     let what = describe(&changed, |k| (get(&old, k), get(&new, k)));
+    // Names come from the file too.
+    let what = crate::console::printable(&what).into_owned();
     match changed.iter().all(|k| QUALITY.contains(k)) {
         true => Difference::Quality {
             what,
@@ -201,8 +203,9 @@ fn describe<'a>(changed: &[&str], pair: impl Fn(&str) -> Pair<'a>) -> String {
                 let p = pair(k);
                 [p.0, p.1][i].unwrap_or("?")
             });
-            match v[2] {
-                "none" => v[0].to_string(),
+            let v = v.map(shown);
+            match v[2].as_str() {
+                "none" => v[0].clone(),
                 t if changed.contains(&"threshold") => {
                     format!("adaptive {}–{} (threshold {t})", v[0], v[1])
                 }
@@ -219,10 +222,26 @@ fn describe<'a>(changed: &[&str], pair: impl Fn(&str) -> Pair<'a>) -> String {
         ) || k.starts_with("materials");
         parts.push(match (hashed, old, new) {
             (true, Some(_), Some(_)) => k.to_string(),
-            _ => format!("{k}: {} → {}", old.unwrap_or("none"), new.unwrap_or("none")),
+            _ => {
+                let [old, new] = [old, new].map(|v| shown(v.unwrap_or("none")));
+                format!("{k}: {old} → {new}")
+            }
         });
     }
     parts.join(", ")
+}
+
+/// A value as it is shown: a frame's record is a file's text, which may hold anything, so
+/// what reaches a terminal is escaped and cut short.
+fn shown(v: &str) -> String {
+    const LONGEST: usize = 40;
+    let cut: String = v.chars().take(LONGEST).collect();
+    let more = if v.chars().count() > LONGEST {
+        "…"
+    } else {
+        ""
+    };
+    format!("{}{more}", crate::console::printable(&cut))
 }
 
 /// Whether the new quality settings are at least as high as the old in every field: as many
@@ -293,6 +312,15 @@ mod tests {
         );
         assert_eq!(compare(None, OLD), Difference::Unknown);
         assert_eq!(compare(Some(OLD), OLD), Difference::Unknown);
+    }
+
+    #[test]
+    fn a_hostile_record_prints_escaped_and_short() {
+        let evil = OLD.replace("size=8x8", &format!("size=\x1b[2J{}", "9".repeat(99)));
+        let Difference::Content(what) = compare(Some(&evil), OLD) else {
+            panic!("a size is content")
+        };
+        assert_eq!(what, format!("size: \\u{{1b}}[2J{}… → 8x8", "9".repeat(36)));
     }
 
     #[test]
