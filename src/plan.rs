@@ -93,44 +93,21 @@ pub(crate) fn plan(seq: &Sequence, frames: &FrameSet, files: &Files, resume: Res
         // Unlisted (unreadable directory): look at every selected frame's file.
         None => (frames.iter().collect(), FrameSet::new()),
     };
-    let identity = RunIdentity::new(seq, &files.format);
-    let expected = Expected {
-        width: seq.settings.width,
-        height: seq.settings.height,
-        format: files.format,
-        alpha: seq.settings.alpha,
+    let job = Job {
+        seq,
+        files,
+        identity: RunIdentity::new(seq, &files.format),
+        expected: Expected {
+            width: seq.settings.width,
+            height: seq.settings.height,
+            format: files.format,
+            alpha: seq.settings.alpha,
+        },
+        resume,
     };
     let mut previous = None;
     for chunk in present.chunks(CHUNK) {
-        let states: Vec<State> = chunk
-            .par_iter()
-            .map(|&n| {
-                let view = FrameView::of_frame(&seq.timeline, seq.settings.shutter, n);
-                let path = files.frame_path(n);
-                let ours = |f: &str| f == identity.fingerprint(&view);
-                let differs = || {
-                    let old = output::read_record(&path, &files.format);
-                    (
-                        old.is_some(),
-                        record::compare(old.as_deref(), &identity.record(&view)),
-                    )
-                };
-                match output::inspect(&path, &expected) {
-                    Existing::Missing => State::Missing,
-                    Existing::Foreign(why) => State::Foreign(why),
-                    Existing::Corrupt(why) => State::Corrupt(why),
-                    Existing::Ours(f) if ours(&f) => State::UpToDate,
-                    Existing::Damaged { fingerprint, why } if ours(&fingerprint) => {
-                        State::Corrupt(why)
-                    }
-                    Existing::Ours(_) => judge(differs(), true, resume),
-                    Existing::Damaged { why, .. } => match judge(differs(), false, resume) {
-                        State::Stale(what) if what.ends_with("unknown") => State::Stale(why),
-                        state => state,
-                    },
-                }
-            })
-            .collect();
+        let states: Vec<State> = chunk.par_iter().map(|&n| job.state(n)).collect();
         for (&n, state) in chunk.iter().zip(states) {
             // Runs of a state join only frames that follow each other in the selection, so
             // no state's run strides over another's frames and sets stay runs when joined.
@@ -142,6 +119,43 @@ pub(crate) fn plan(seq: &Sequence, frames: &FrameSet, files: &Files, resume: Res
     // Frames that vanished between the listing and their inspection join the missing ones.
     plan.missing = FrameSet::union(&[&plan.missing, &missing]);
     plan
+}
+
+/// What a plan compares each frame's file with.
+struct Job<'a> {
+    seq: &'a Sequence,
+    files: &'a Files,
+    identity: RunIdentity,
+    expected: Expected,
+    resume: Resume,
+}
+
+impl Job<'_> {
+    /// The state of frame `n`'s file.
+    fn state(&self, n: u64) -> State {
+        let seq = self.seq;
+        let view = FrameView::of_frame(&seq.timeline, seq.settings.shutter, n);
+        let path = self.files.frame_path(n);
+        let ours = |f: &str| f == self.identity.fingerprint(&view);
+        let differs = || {
+            let old = output::read_record(&path, &self.files.format);
+            let new = self.identity.record(&view);
+            (old.is_some(), record::compare(old.as_deref(), &new))
+        };
+        match output::inspect(&path, &self.expected) {
+            Existing::Missing => State::Missing,
+            Existing::Foreign(why) => State::Foreign(why),
+            Existing::Corrupt(why) => State::Corrupt(why),
+            Existing::Ours(f) if ours(&f) => State::UpToDate,
+            Existing::Damaged { fingerprint, why } if ours(&fingerprint) => State::Corrupt(why),
+            Existing::Ours(_) => judge(differs(), true, self.resume),
+            // Not of this job's size or channels, or broken: say why when the records cannot.
+            Existing::Damaged { why, .. } => match judge(differs(), false, self.resume) {
+                State::Stale(what) if what.ends_with("unknown") => State::Stale(why),
+                state => state,
+            },
+        }
+    }
 }
 
 /// The state of a frame whose fingerprint is not this job's, from how its record differs

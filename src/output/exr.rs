@@ -45,6 +45,23 @@ pub(crate) fn encode(
     if let Some(depth) = &frame.depth {
         channels.push(AnyChannel::new("Z", FlatSamples::F32(depth.clone())));
     }
+    let attributes = attributes(meta);
+    let encoding = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let layer = Layer::new((w, h), attributes, encoding, AnyChannels::sort(channels));
+    let mut out = Cursor::new(Vec::new());
+    Image::from_layer(layer).write().to_buffered(&mut out)?;
+    let mut bytes = out.into_inner();
+    sort_attributes(&mut bytes)?;
+    Ok((bytes, clamped.get()))
+}
+
+/// The header attributes that say what the frame is: its rate, number, time, fingerprint,
+/// settings record and camera matrices.
+fn attributes(meta: &FrameMeta) -> LayerAttributes {
     let mut attributes = LayerAttributes {
         frames_per_second: Some(meta.fps),
         ..LayerAttributes::default()
@@ -68,17 +85,7 @@ pub(crate) fn encode(
         attributes.world_to_camera = Some(to_camera.to_cols_array().map(|v| v as f32));
         attributes.world_to_normalized_device = Some(to_ndc.to_cols_array().map(|v| v as f32));
     }
-    let encoding = Encoding {
-        compression: Compression::ZIP16,
-        blocks: Blocks::ScanLines,
-        line_order: LineOrder::Increasing,
-    };
-    let layer = Layer::new((w, h), attributes, encoding, AnyChannels::sort(channels));
-    let mut out = Cursor::new(Vec::new());
-    Image::from_layer(layer).write().to_buffered(&mut out)?;
-    let mut bytes = out.into_inner();
-    sort_attributes(&mut bytes)?;
-    Ok((bytes, clamped.get()))
+    attributes
 }
 
 /// The exr crate writes custom attributes in hash-map order, which differs from process to
