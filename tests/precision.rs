@@ -137,8 +137,9 @@ fn a_scene_f32_cannot_resolve_is_named_and_traced_in_f64() {
     assert_eq!(render.stdout, f64, "the fallback is the f64 frame");
 }
 
-/// f32 frames are other frames: files rendered in f64 are stale for an f32 run (and the
-/// other way round), so a resumed job never mixes them.
+/// f32 frames are other frames: files rendered in f64 are not up to date for an f32 run (and
+/// the other way round); an f32 run keeps the f64 frame (a quality difference, never lowered
+/// unasked), an f64 run re-renders an f32 one.
 #[test]
 fn precision_is_in_the_fingerprint() {
     let tmp = scratch("precision-resume");
@@ -184,7 +185,10 @@ fn precision_is_in_the_fingerprint() {
         status("f32"),
         "f64 frames must not count as done for f32"
     );
+    assert_eq!(render("f32"), a, "an f32 run keeps the f64 frame");
+    std::fs::remove_file(tmp.join("f/0000.png")).unwrap();
     let b = render("f32");
     assert_ne!(a, b);
     assert_ne!(status("f32"), status("f64"));
+    assert_eq!(render("f64"), a, "an f64 run raises the f32 frame");
 }

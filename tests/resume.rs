@@ -46,20 +46,9 @@ fn killed_at_any_moment_resumes_to_the_identical_sequence() {
         .iter()
         .enumerate()
     {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_rayreel"))
-            .args([
-                "render",
-                "seq.yaml",
-                "-o",
-                "out/f_####.png",
-                "--threads",
-                if i % 2 == 0 { "2" } else { "1" },
-            ])
-            .args(heavy)
-            .current_dir(&tmp)
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
+        let threads = if i % 2 == 0 { "2" } else { "1" };
+        let args = [&["-o", "out/f_####.png", "--threads", threads][..], &heavy].concat();
+        let mut child = start(&tmp, &args, Stdio::null());
         std::thread::sleep(Duration::from_millis(*delay_ms));
         child.kill().unwrap(); // SIGKILL
         cut_short += usize::from(!child.wait().unwrap().success());
@@ -164,21 +153,15 @@ fn editing_a_keyframe_rerenders_exactly_the_frames_it_moves() {
 fn ctrl_c_stops_cleanly_with_exit_130_and_the_rerun_finishes() {
     let tmp = setup("sigint");
     render(&tmp, &["-o", "clean/f_####.png", "--size", "640x360", "-q"]);
-    let child = Command::new(env!("CARGO_BIN_EXE_rayreel"))
-        .args([
-            "render",
-            "seq.yaml",
-            "-o",
-            "out/f_####.png",
-            "--size",
-            "640x360",
-            "--threads",
-            "1",
-        ])
-        .current_dir(&tmp)
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let args = [
+        "-o",
+        "out/f_####.png",
+        "--size",
+        "640x360",
+        "--threads",
+        "1",
+    ];
+    let child = start(&tmp, &args, Stdio::piped());
     std::thread::sleep(Duration::from_millis(150));
     // SAFETY: sends SIGINT to our own child.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
@@ -219,4 +202,177 @@ fn exr_frames_resume_too() {
         log.contains("6 frames: 6 stale → rendering 6"),
         "without depth the files differ: {log}"
     );
+}
+
+/// The frame numbers of the `written` events of a `--progress json` log, in order.
+fn written_order(log: &str) -> Vec<u64> {
+    log.lines()
+        .filter(|l| l.contains("\"status\": \"written\""))
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            v["frame"].as_u64().unwrap()
+        })
+        .collect()
+}
+
+#[test]
+fn frames_are_written_in_ascending_order() {
+    let tmp = setup("order");
+    let small = "--size 96x54 --samples 4 --frames 0-23 --progress json --force";
+    for threads in ["2", "1"] {
+        let args = format!("-o out/f_####.png {small} --threads {threads}");
+        let log = render(&tmp, &args.split(' ').collect::<Vec<_>>());
+        assert_eq!(written_order(&log), (0..24).collect::<Vec<_>>());
+    }
+}
+
+/// `rayreel render seq.yaml ARGS` started in `dir`, its stderr going to `err`.
+fn start(dir: &Path, args: &[&str], err: Stdio) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_rayreel"))
+        .args(["render", "seq.yaml"])
+        .args(args)
+        .current_dir(dir)
+        .stderr(err)
+        .spawn()
+        .unwrap()
+}
+
+#[test]
+fn an_interrupted_run_leaves_a_prefix_of_its_frames() {
+    use std::io::BufRead;
+    let tmp = setup("prefix");
+    let args = "-o out/f_####.png --size 320x180 --samples 4 --progress json --threads 2";
+    let mut child = start(&tmp, &args.split(' ').collect::<Vec<_>>(), Stdio::piped());
+    let mut lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+    let mut log = String::new();
+    let mut seen = 0;
+    while seen < 3 {
+        let line = lines.next().expect("the run writes 3 frames").unwrap();
+        seen += usize::from(line.contains("\"status\": \"written\""));
+        log += &line;
+        log += "\n";
+    }
+    // SAFETY: sends SIGINT to our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    lines.for_each(|l| log += &(l.unwrap() + "\n"));
+    assert_eq!(child.wait().unwrap().code(), Some(130), "{log}");
+    let written = files(&tmp.join("out"));
+    assert!(written.len() < 49, "the interrupt came too late: {log}");
+    let prefix: Vec<String> = (0..written.len())
+        .map(|n| format!("f_{n:04}.png"))
+        .collect();
+    assert_eq!(written, prefix, "{log}");
+    assert_eq!(
+        written_order(&log),
+        (0..written.len() as u64).collect::<Vec<_>>()
+    );
+}
+
+/// `rayreel ARGS` in `dir` with `ARGS` split at spaces: (exit code, stdout + stderr).
+fn rayreel(dir: &Path, args: &str) -> (Option<i32>, String) {
+    let out = run_in(dir, &args.split(' ').collect::<Vec<_>>());
+    let text = String::from_utf8_lossy(&out.stdout).into_owned() + &stderr(&out);
+    (out.status.code(), text)
+}
+
+/// Runs `rayreel ARGS`, which must exit with `code` and say every one of `wants`.
+fn says(dir: &Path, args: &str, code: i32, wants: &[&str]) {
+    let (got, log) = rayreel(dir, args);
+    assert_eq!(got, Some(code), "{args}: {log}");
+    let missing: Vec<&&str> = wants.iter().filter(|w| !log.contains(**w)).collect();
+    assert!(missing.is_empty(), "{args}: no {missing:?} in {log}");
+}
+
+/// The bytes of every frame file below `dir`.
+fn frame_bytes(dir: &Path) -> Vec<Vec<u8>> {
+    let names = files(dir);
+    names
+        .iter()
+        .map(|f| std::fs::read(dir.join(f)).unwrap())
+        .collect()
+}
+
+/// A scratch directory with `frames` of the test sequence rendered at 64x36 with `extra`
+/// arguments, and the job's arguments (without `extra`).
+fn rendered_small(name: &str, frames: &str, extra: &str) -> (Scratch, String) {
+    let tmp = setup(name);
+    let job = format!("seq.yaml -o out/f_####.png --size 64x36 --frames {frames}");
+    says(&tmp, &format!("render {job} {extra}"), 0, &[]);
+    (tmp, job)
+}
+
+#[test]
+fn a_rerun_at_lower_quality_keeps_the_frames_and_says_what_differs() {
+    let (tmp, job) = rendered_small("quality", "0-5", "--samples 16 --max-depth 4");
+    let finished = frame_bytes(&tmp.join("out"));
+    let lower = format!("{job} --samples 4 --max-depth 4");
+    let kept =
+        "kept 0-5 made with other quality settings (samples: 16 → 4); --force re-renders them";
+    for command in ["render", "render --dry-run", "status"] {
+        says(
+            &tmp,
+            &format!("{command} {lower}"),
+            0,
+            &["6 frames: 6 kept", kept],
+        );
+    }
+    assert_eq!(frame_bytes(&tmp.join("out")), finished);
+    // Raising every quality setting re-renders; so does --force, and a content change.
+    let raised = format!("status {job} --samples 16 --max-depth 5");
+    says(&tmp, &raised, 1, &["stale 0-5: max_depth: 4 → 5"]);
+    let forced = format!("render {lower} --force --dry-run");
+    says(&tmp, &forced, 0, &["6 stale → rendering 6 (--force)"]);
+    let exposed = format!("status {lower} --exposure 1");
+    says(
+        &tmp,
+        &exposed,
+        1,
+        &["stale 0-5: samples: 16 → 4, exposure: 0 → 1"],
+    );
+    let smaller = format!("status {job} --samples 16 --max-depth 4").replace("64x36", "32x18");
+    says(&tmp, &smaller, 1, &["stale 0-5: size: 64x36 → 32x18"]);
+    let redder = seq().replace("[0.7, 0, 0]", "[0.6, 0, 0]");
+    std::fs::write(tmp.join("seq.yaml"), redder).unwrap();
+    let same = format!("status {job} --samples 16 --max-depth 4");
+    says(&tmp, &same, 1, &["stale 0-5: materials.red"]);
+    // --skip-existing trusts any complete frame of the job's size.
+    let why = "kept 0-5 by --skip-existing (samples: 16 → 4, materials.red)";
+    let args = format!("render {lower} --skip-existing");
+    says(&tmp, &args, 0, &["6 kept → rendering 0", why]);
+    assert_eq!(frame_bytes(&tmp.join("out")), finished);
+}
+
+/// A PNG without the chunk that records its settings, as rayreel wrote them before it had one.
+fn without_record(png: &[u8]) -> Vec<u8> {
+    let mut out = png[..8].to_vec();
+    let mut at = 8;
+    while at + 12 <= png.len() {
+        let len = u32::from_be_bytes(png[at..at + 4].try_into().unwrap()) as usize;
+        let chunk = &png[at..at + 12 + len];
+        if !chunk[4..].starts_with(b"tEXtrayreel:settings\0") {
+            out.extend(chunk);
+        }
+        at += 12 + len;
+    }
+    out
+}
+
+#[test]
+fn frames_without_a_settings_record_are_rerendered_as_before() {
+    let (tmp, job) = rendered_small("older", "0-2", "--samples 16");
+    for f in files(&tmp.join("out")) {
+        let path = tmp.join("out").join(f);
+        let old = without_record(&std::fs::read(&path).unwrap());
+        std::fs::write(&path, old).unwrap();
+    }
+    // The fingerprint alone still says up to date.
+    says(
+        &tmp,
+        &format!("status {job} --samples 16"),
+        0,
+        &["3 up to date"],
+    );
+    let why = "stale 0-2: made by an older rayreel; differs: unknown";
+    let args = format!("render {job} --samples 4");
+    says(&tmp, &args, 0, &["3 stale → rendering 3", why]);
 }

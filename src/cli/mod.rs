@@ -260,10 +260,14 @@ pub struct RenderArgs {
     /// Print which frames are up to date, stale, missing, corrupt or foreign, and render nothing.
     #[arg(long)]
     pub(crate) dry_run: bool,
-    /// Render and overwrite every selected frame, even up-to-date ones and files rayreel did
-    /// not write.
+    /// Render and overwrite every selected frame, even up-to-date ones, frames made at other
+    /// quality and files rayreel did not write.
     #[arg(long)]
     pub(crate) force: bool,
+    /// Keep every complete frame of the job's size and channels, whatever settings made it;
+    /// render only missing and corrupt frames.
+    #[arg(long, conflicts_with = "force")]
+    pub(crate) skip_existing: bool,
     /// Share the frames with other rayreel processes on the same directory through claim
     /// files; a claim whose owner died or went silent is taken over.
     #[arg(long)]
@@ -271,6 +275,18 @@ pub struct RenderArgs {
     /// Seconds without a heartbeat after which another host's claim is taken over.
     #[arg(long, value_name = "SECONDS", default_value_t = 120, value_parser = clap::value_parser!(u64).range(2..))]
     pub(crate) claim_timeout: u64,
+}
+
+impl RenderArgs {
+    /// What to do with frames that exist, as `--force` and `--skip-existing` say.
+    pub(crate) fn resume(&self) -> crate::plan::Resume {
+        use crate::plan::Resume;
+        match (self.force, self.skip_existing) {
+            (true, _) => Resume::Force,
+            (_, true) => Resume::SkipExisting,
+            _ => Resume::Normal,
+        }
+    }
 }
 
 /// Most worker threads `--threads` may ask for: more than machines have cores, few enough to

@@ -7,7 +7,7 @@ use crate::cli::job::Job;
 use crate::cli::{ProgressFormat, RenderArgs};
 use crate::frameset::FrameSet;
 use crate::output::{self, Files, stream::StreamFormat, video::VideoJob};
-use crate::plan::{self, Plan, State};
+use crate::plan::{self, Plan, Resume, State};
 use crate::progress::Progress;
 use crate::schedule::{self, Batch, Outcome, RunError, Task};
 use crate::sequence::Sequence;
@@ -57,7 +57,7 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     };
     let plan = files
         .as_ref()
-        .map(|f| plan::plan(&seq, &frames, f, args.force));
+        .map(|f| plan::plan(&seq, &frames, f, args.resume()));
     let tasks = tasks(&frames, plan.as_ref(), stream.is_some());
     let mut progress = progress_for(&args, tasks.len() as u64, seq.timeline.frame_count);
     start(&progress, &warnings, plan.as_ref(), frames.len());
@@ -83,7 +83,12 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
         threads,
         claims,
     };
-    let outcome = run_job(&pool, batch, &frames, &mut progress)?;
+    let outcome = run_job(
+        &pool,
+        batch,
+        (&frames, args.resume().unforced()),
+        &mut progress,
+    )?;
     let outcome = match encoder.take() {
         Some(encoder) => end_video(encoder, outcome)?,
         None => outcome,
@@ -102,7 +107,7 @@ fn dry_run(
     warnings
         .iter()
         .for_each(|w| crate::console::warning(&format!("warning: {w}")));
-    let plan = files.map(|f| plan::plan(seq, frames, f, args.force));
+    let plan = files.map(|f| plan::plan(seq, frames, f, args.resume()));
     if args.print_ffmpeg {
         let stream = args.pipe.map(|p| (p, sixteen_bit));
         let line = match video {
@@ -202,6 +207,9 @@ fn start(progress: &Progress, warnings: &[String], plan: Option<&Plan>, selected
         .as_ref()
         .map(|(summary, counts)| (summary.as_str(), &counts[..]));
     progress.start(planned, selected);
+    plan.iter()
+        .flat_map(|p| p.reasons())
+        .for_each(|r| progress.note(&r));
 }
 
 /// The worker threads, started before anything else happens: a count the machine cannot
@@ -222,7 +230,7 @@ fn workers(asked: Option<u16>) -> Result<(rayon::ThreadPool, usize), Error> {
 fn run_job(
     pool: &rayon::ThreadPool,
     batch: Batch,
-    frames: &FrameSet,
+    frames: (&FrameSet, Resume),
     progress: &mut Progress,
 ) -> Result<Result<Outcome, RunError>, Error> {
     let mut written = FrameSet::new();
@@ -248,14 +256,15 @@ fn run_job(
 /// vanished or was replaced meanwhile (another program, a full disk elsewhere) is reported
 /// rather than assumed done.
 fn verify(seq: &Sequence, written: &FrameSet, files: &Files) -> Result<(), Error> {
-    let check = plan::plan(seq, written, files, false);
+    let check = plan::plan(seq, written, files, Resume::Normal);
     let mut bad: Vec<(u64, State)> = check
         .why
         .into_iter()
         .map(|(n, why)| (n, State::Corrupt(why)))
         .collect();
     for (set, state) in [
-        (&check.stale, State::Stale),
+        (&check.stale, State::Stale(String::new())),
+        (&check.kept, State::Stale(String::new())),
         (&check.missing, State::Missing),
     ] {
         bad.extend(set.iter().map(|n| (n, state.clone())));
@@ -283,7 +292,7 @@ fn verify(seq: &Sequence, written: &FrameSet, files: &Files) -> Result<(), Error
 fn describe(s: &State) -> String {
     match s {
         State::UpToDate => "up to date".into(),
-        State::Stale => "replaced by a different render".into(),
+        State::Stale(_) | State::Kept(_) => "replaced by a different render".into(),
         State::Missing => "vanished".into(),
         State::Corrupt(why) => format!("now corrupt: {why}"),
         State::Foreign(why) => format!("replaced by something rayreel did not write: {why}"),
@@ -296,7 +305,7 @@ fn describe(s: &State) -> String {
 fn cooperate(
     pool: &rayon::ThreadPool,
     mut batch: Batch,
-    frames: &FrameSet,
+    (frames, resume): (&FrameSet, Resume),
     progress: &mut Progress,
 ) -> Result<Outcome, RunError> {
     let mut written = 0;
@@ -347,7 +356,7 @@ fn cooperate(
             }
             std::thread::sleep(Duration::from_millis(500));
         }
-        let plan = plan::plan(&batch.sequence, frames, files, false);
+        let plan = plan::plan(&batch.sequence, frames, files, resume);
         batch.tasks = tasks(frames, Some(&plan), false);
         if batch.tasks.is_empty() {
             return Ok(Outcome::Complete {
@@ -396,7 +405,8 @@ fn print_dry_run(
         }
         (Some(plan), None) => {
             let render = plan.to_render();
-            let text = format!("{}\nwould render: {render}\n", plan.summary());
+            let reasons: String = plan.reasons().iter().map(|r| format!("{r}\n")).collect();
+            let text = format!("{}\n{reasons}would render: {render}\n", plan.summary());
             (text, render.len())
         }
         (None, None) => (format!("would stream frames: {frames}\n"), frames.len()),
@@ -443,6 +453,9 @@ fn report_skipped(progress: &Progress, plan: &Plan, files: &Files) {
     if progress.reports_skipped() {
         for n in plan.up_to_date.iter() {
             progress.frame_skipped(n, &path(n), "up-to-date");
+        }
+        for n in plan.kept.iter() {
+            progress.frame_skipped(n, &path(n), "kept");
         }
     }
     for (n, why) in &plan.why_foreign {
@@ -600,7 +613,7 @@ pub(crate) fn status(args: RenderArgs) -> Result<(), Error> {
     let spec = Job::for_status(&args.job)?;
     let files = spec.files(&args.job)?;
     let (seq, frames) = (spec.seq, spec.frames);
-    let plan = plan::plan(&seq, &frames, &files, false);
+    let plan = plan::plan(&seq, &frames, &files, args.resume().unforced());
     let dir = plan::directory(&files.frame_path(0));
     let mut lines = vec![format!("{}: {}", shown(&dir), plan.status_line())];
     for (label, set) in plan.by_state() {
@@ -608,10 +621,12 @@ pub(crate) fn status(args: RenderArgs) -> Result<(), Error> {
             lines.push(format!("  {label:<11} {set}"));
         }
     }
+    lines.extend(plan.reasons().iter().map(|r| format!("  {r}")));
     // A closed stdout ends the listing, not the verdict: the exit code still says whether
     // every frame is up to date.
     out(&format!("{}\n", lines.join("\n")))?;
-    let done = plan.up_to_date.len();
+    // Kept frames are done: `render` would leave them as they are.
+    let done = plan.up_to_date.len() + plan.kept.len();
     let selected = plan.selected_count();
     if done == selected {
         Ok(())

@@ -49,6 +49,23 @@ pub(crate) fn encode(
     for (name, values) in frame.aov.iter().flat_map(|p| &p.channels) {
         channels.push(AnyChannel::new(*name, FlatSamples::F32(values.clone())));
     }
+    let attributes = attributes(meta, frame);
+    let encoding = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let layer = Layer::new((w, h), attributes, encoding, AnyChannels::sort(channels));
+    let mut out = Cursor::new(Vec::new());
+    Image::from_layer(layer).write().to_buffered(&mut out)?;
+    let mut bytes = out.into_inner();
+    sort_attributes(&mut bytes)?;
+    Ok((bytes, clamped.get()))
+}
+
+/// The header attributes that say what the frame is: its rate, number, time, fingerprint,
+/// settings record, object id table and camera matrices.
+fn attributes(meta: &FrameMeta, frame: &Frame) -> LayerAttributes {
     let mut attributes = LayerAttributes {
         frames_per_second: Some(meta.fps),
         ..LayerAttributes::default()
@@ -63,6 +80,10 @@ pub(crate) fn encode(
         AttributeValue::I32(i32::try_from(meta.frame).unwrap_or(i32::MAX)),
     );
     other.insert(Text::from("rayreel:time"), AttributeValue::F64(meta.time));
+    other.insert(
+        Text::from(super::record::KEY),
+        AttributeValue::Text(Text::from(meta.record.as_str())),
+    );
     if let Some(passes) = frame.aov.as_ref().filter(|p| has_ids(p)) {
         other.insert(
             Text::from(OBJECTS_KEY),
@@ -74,17 +95,7 @@ pub(crate) fn encode(
         attributes.world_to_camera = Some(to_camera.to_cols_array().map(|v| v as f32));
         attributes.world_to_normalized_device = Some(to_ndc.to_cols_array().map(|v| v as f32));
     }
-    let encoding = Encoding {
-        compression: Compression::ZIP16,
-        blocks: Blocks::ScanLines,
-        line_order: LineOrder::Increasing,
-    };
-    let layer = Layer::new((w, h), attributes, encoding, AnyChannels::sort(channels));
-    let mut out = Cursor::new(Vec::new());
-    Image::from_layer(layer).write().to_buffered(&mut out)?;
-    let mut bytes = out.into_inner();
-    sort_attributes(&mut bytes)?;
-    Ok((bytes, clamped.get()))
+    attributes
 }
 
 /// The header attribute holding the table of object ids (`tracer::aov::objects`).
@@ -165,9 +176,10 @@ fn attribute_at(bytes: &[u8], at: usize) -> Option<Attribute<'_>> {
     })
 }
 
-/// The fingerprint attribute of an EXR header, read from the start of a file (the header is
-/// its first few kilobytes); `None` when it is not an EXR file or has no such attribute there.
-pub(crate) fn header_fingerprint(head: &[u8]) -> Option<String> {
+/// The string attribute `key` (our fingerprint or settings record) of an EXR header, read from
+/// the start of a file (the header is its first few kilobytes); `None` when it is not an EXR
+/// file or has no such attribute there.
+pub(crate) fn header_text(head: &[u8], key: &str) -> Option<String> {
     const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
     if head.get(..4)? != MAGIC {
         return None;
@@ -178,7 +190,7 @@ pub(crate) fn header_fingerprint(head: &[u8]) -> Option<String> {
         if attribute.name.is_empty() {
             return None;
         }
-        if attribute.name == fingerprint::KEY.as_bytes() && attribute.kind == b"string" {
+        if attribute.name == key.as_bytes() && attribute.kind == b"string" {
             return Some(String::from_utf8_lossy(attribute.value).into_owned());
         }
         at = attribute.end;

@@ -6,6 +6,7 @@
 
 use super::fingerprint::{self, Hasher};
 use super::format::FileFormat;
+use super::record;
 use crate::pattern::Pattern;
 use crate::sequence::Sequence;
 use crate::shutter::FrameView;
@@ -33,16 +34,19 @@ pub(crate) struct FrameMeta {
     /// `framesPerSecond`: the exact fraction, or the closest that an EXR header holds.
     pub(crate) fps: (i32, u32),
     pub(crate) fingerprint: String,
+    /// The settings record (`record::of_frame`).
+    pub(crate) record: String,
     /// `worldToCamera` and `worldToNDC` (row-major, row vectors) when the frame has a camera.
     pub(crate) matrices: Option<[glam::DMat4; 2]>,
 }
 
 /// What every frame file of a run shares: the hash of the renderer's version, the scene, the
 /// settings and the file format (`fingerprint::of_run`, and for EXR the frame rate its header
-/// records), the frame rate and the image size.
-#[derive(Clone, Copy)]
+/// records), the frame rate, the image size and the run's lines of the settings record.
+#[derive(Clone)]
 pub(crate) struct RunIdentity {
     run: Hasher,
+    record: String,
     fps: (i32, u32),
     size: (u32, u32),
     /// The file records its frame rate and time in a way the fingerprint covers (EXR).
@@ -57,6 +61,7 @@ impl RunIdentity {
         let run = fingerprint::of_run(&seq.scene, s, format);
         let exr = matches!(format, FileFormat::Exr { .. });
         RunIdentity {
+            record: record::of_run(seq, format, exr.then_some(fps)),
             run: match exr {
                 true => fingerprint::with_exr_rate(&run, fps),
                 false => run,
@@ -73,6 +78,12 @@ impl RunIdentity {
         fingerprint::of_frame(&self.run, view, self.exr)
     }
 
+    /// The settings record of the frame `view` shows: what its file carries, and what the
+    /// resume check compares an existing file's record with.
+    pub(crate) fn record(&self, view: &FrameView) -> String {
+        record::of_frame(&self.record, view, self.exr)
+    }
+
     /// Everything the file of the frame `view` shows records about it.
     pub(crate) fn meta(&self, view: &FrameView) -> FrameMeta {
         let (width, height) = self.size;
@@ -81,6 +92,7 @@ impl RunIdentity {
             time: view.time,
             fps: self.fps,
             fingerprint: self.fingerprint(view),
+            record: self.record(view),
             matrices: view
                 .exposure
                 .as_ref()

@@ -10,6 +10,7 @@ pub(crate) mod fingerprint;
 pub(crate) mod format;
 pub(crate) mod identity;
 pub mod png;
+pub(crate) mod record;
 pub(crate) mod stream;
 pub(crate) mod video;
 
@@ -36,6 +37,7 @@ pub(crate) fn encode_file(
                 (fingerprint::KEY, meta.fingerprint.clone()),
                 ("rayreel:frame", meta.frame.to_string()),
                 ("rayreel:time", format!("{}", meta.time)),
+                (record::KEY, meta.record.clone()),
             ];
             Ok((png::encode(frame, sixteen_bit, compression, &text)?, 0))
         }
@@ -76,6 +78,18 @@ pub(crate) fn inspect(path: &Path, expected: &Expected) -> Existing {
     }
 }
 
+/// The settings record (`record::KEY`) in the header of the file at `path`, if it has one:
+/// read again, and only for frames whose fingerprint differs, to say what differs.
+pub(crate) fn read_record(path: &Path, format: &FileFormat) -> Option<String> {
+    use crate::regular::{self, Links};
+    let (file, meta) = regular::open(path, Links::Follow).ok()?;
+    let head = regular::read_at_most(&file, meta.len(), HEADER_BYTES).ok()?;
+    match format {
+        FileFormat::Png { .. } => png::header_text(&head, record::KEY),
+        FileFormat::Exr { .. } => exr::header_text(&head, record::KEY),
+    }
+}
+
 /// How much of a file larger than any frame of the job is read: enough for the header, where
 /// rayreel puts the fingerprint (before a PNG's image data, in an EXR's header).
 const HEADER_BYTES: u64 = 64 << 10;
@@ -85,8 +99,8 @@ const HEADER_BYTES: u64 = 64 << 10;
 /// otherwise someone else's.
 fn oversized(head: &[u8], size: u64, limit: u64, expected: &Expected) -> Existing {
     let fingerprint = match expected.format {
-        FileFormat::Png { .. } => png::header_fingerprint(head),
-        FileFormat::Exr { .. } => exr::header_fingerprint(head),
+        FileFormat::Png { .. } => png::header_text(head, fingerprint::KEY),
+        FileFormat::Exr { .. } => exr::header_text(head, fingerprint::KEY),
     };
     match fingerprint {
         Some(fingerprint) => Existing::Damaged {

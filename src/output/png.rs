@@ -118,7 +118,7 @@ fn walk(bytes: &[u8]) -> Result<Chunks<'_>, String> {
             b"IDAT" => found.data.push(data),
             b"IEND" => return Ok(found),
             b"tEXt" => {
-                if let Some(f) = text_fingerprint(data) {
+                if let Some(f) = text_value(data, fingerprint::KEY) {
                     found.fingerprint = Some(f);
                 }
             }
@@ -129,15 +129,15 @@ fn walk(bytes: &[u8]) -> Result<Chunks<'_>, String> {
     Err("truncated".into())
 }
 
-/// The fingerprint among the chunks ahead of the image data, read from the start of a file
-/// (rayreel writes it there, so the first kilobytes are enough); `None` when a checksum fails
-/// or the image data comes first.
-pub(crate) fn header_fingerprint(head: &[u8]) -> Option<String> {
+/// The text under `key` (our fingerprint or settings record) among the chunks ahead of the
+/// image data, read from the start of a file (rayreel writes them there, so the first
+/// kilobytes are enough); `None` when a checksum fails or the image data comes first.
+pub(crate) fn header_text(head: &[u8], key: &str) -> Option<String> {
     for chunk in chunks(head.strip_prefix(SIGNATURE)?) {
         match chunk.ok()? {
             (b"IDAT" | b"IEND", _) => return None,
             (b"tEXt", data) => {
-                if let Some(f) = text_fingerprint(data) {
+                if let Some(f) = text_value(data, key) {
                     return Some(f);
                 }
             }
@@ -147,11 +147,9 @@ pub(crate) fn header_fingerprint(head: &[u8]) -> Option<String> {
     None
 }
 
-/// The value of a `tEXt` chunk holding our fingerprint.
-fn text_fingerprint(data: &[u8]) -> Option<String> {
-    let value = data
-        .strip_prefix(fingerprint::KEY.as_bytes())?
-        .strip_prefix(b"\0")?;
+/// The value of a `tEXt` chunk with the keyword `key`.
+fn text_value(data: &[u8], key: &str) -> Option<String> {
+    let value = data.strip_prefix(key.as_bytes())?.strip_prefix(b"\0")?;
     Some(String::from_utf8_lossy(value).into_owned())
 }
 

@@ -3,12 +3,13 @@
 //! the first signal noticed.
 
 use super::stream::{Reorder, StreamWriter};
-use super::work::Produced;
+use super::work::{Encoded, Produced};
 use super::{Batch, Outcome, RunError};
 use crate::claim::{Attempt, Claims};
 use crate::output;
 use crate::progress::Progress;
 use crate::signals::{interrupt_code, interrupted, signal_name};
+use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -23,6 +24,10 @@ pub(super) struct Delivery<'a> {
     held: Vec<u64>,
     /// Frames in flight under a claim, with when they were last refreshed.
     claimed: Vec<(u64, Instant)>,
+    /// Frames started and not yet back, and frames back before a lower one: files are
+    /// written in frame order, so what is on disk is always a prefix of the run's frames.
+    in_flight: BTreeSet<u64>,
+    early: BTreeMap<u64, Encoded>,
     pub(super) stop: Option<Result<Outcome, RunError>>,
     /// Set once the run stops: frames in flight give up at their next pixel.
     pub(super) cancel: Arc<AtomicBool>,
@@ -46,6 +51,8 @@ impl<'a> Delivery<'a> {
             written: 0,
             held: Vec::new(),
             claimed: Vec::new(),
+            in_flight: BTreeSet::new(),
+            early: BTreeMap::new(),
             stop: None,
             cancel: Arc::new(AtomicBool::new(false)),
             signalled: None,
@@ -86,6 +93,10 @@ impl Delivery<'_> {
     /// The run's outcome; claims still held for frames left behind are released.
     pub(super) fn finish(mut self) -> Result<Outcome, RunError> {
         self.cancel.store(true, Ordering::SeqCst);
+        // Frames finished while a lower one was left behind are kept all the same.
+        while let Some((n, done)) = self.early.pop_first() {
+            self.write(n, done);
+        }
         for (n, _) in self.claimed.clone() {
             self.release(n);
         }
@@ -99,7 +110,12 @@ impl Delivery<'_> {
     }
 
     pub(super) fn held_for_order(&self) -> usize {
-        self.stream.as_ref().map_or(0, |r| r.held.len())
+        self.early.len() + self.stream.as_ref().map_or(0, |r| r.held.len())
+    }
+
+    /// Frame `n` has been handed to the workers.
+    pub(super) fn started(&mut self, n: u64) {
+        self.in_flight.insert(n);
     }
 
     /// Claims frame `n` when cooperating; false if another process holds it.
@@ -144,19 +160,31 @@ impl Delivery<'_> {
         }
     }
 
-    /// Writes a finished frame's file and stream bytes, or records why it failed.
+    /// Takes a frame back from the workers: records why it failed, or writes it and every
+    /// frame held for it once no lower frame is in flight.
     pub(super) fn deliver(&mut self, frame: u64, done: Produced) {
-        let done = match done {
-            Ok(Some(d)) => d,
-            Ok(None) => return self.release(frame),
+        self.in_flight.remove(&frame);
+        match done {
+            Ok(Some(d)) => {
+                self.early.insert(frame, d);
+            }
+            Ok(None) => self.release(frame),
             Err(e) => {
                 self.release(frame);
                 self.progress.frame_failed(frame, &e.to_string());
                 self.stop.get_or_insert(Err(e));
                 self.cancel.store(true, Ordering::SeqCst);
-                return;
             }
-        };
+        }
+        let due = self.in_flight.first().copied().unwrap_or(u64::MAX);
+        while let Some(entry) = self.early.first_entry().filter(|e| *e.key() < due) {
+            let (n, done) = entry.remove_entry();
+            self.write(n, done);
+        }
+    }
+
+    /// Writes a finished frame's file and stream bytes.
+    fn write(&mut self, frame: u64, done: Encoded) {
         if let (Some(bytes), Some(files)) = (&done.file, &self.batch.files) {
             let path = files.frame_path(frame);
             let result = output::atomic::write_atomic(&path, bytes);

@@ -1,12 +1,13 @@
-//! The frame scheduler: renders the selected frames on a rayon pool, a bounded window of frames
-//! at a time (rows of each frame are parallel too), so both cores stay busy from the first
-//! frame to the last, the first file appears early, and memory does not grow with the length
-//! of the sequence or with a slow reader. Workers only compute (render, encode); this thread
-//! does all I/O: atomic file writes as frames finish, the stream strictly in frame order.
-
+//! The frame scheduler: renders the selected frames on a rayon pool in ascending order, each
+//! on every thread (its rows in parallel), the next one starting as soon as one is rendered
+//! while that one is encoded, so both cores stay busy, frames are written in order and an
+//! interrupted run leaves a prefix. A bounded window of frames is handed over at a time, so
+//! memory does not grow with the length of the sequence or with a slow reader. Workers only
+//! compute (render, encode); this thread does all I/O: atomic file writes in frame order, the
+//! stream strictly in frame order.
 //!
-//! `work` is what a worker does with one frame (render, encode); `delivery` is what this
-//! thread does with a finished one (claims, atomic writes, progress); `stream` keeps the
+//! `work` is what the workers do with the frames (render in turn, encode); `delivery` is what
+//! this thread does with a finished one (claims, atomic writes, progress); `stream` keeps the
 //! stream's order and writes it on a thread of its own.
 
 mod delivery;
@@ -24,9 +25,9 @@ use crate::tracer::{self, World};
 use delivery::Delivery;
 use std::io::Write;
 use std::sync::atomic::AtomicBool;
-use std::sync::{Arc, mpsc};
+use std::sync::{Arc, Mutex, mpsc};
 use std::time::Duration;
-use work::{Produced, produce};
+use work::{Produced, Renderer};
 
 /// One frame of a run: its number, and whether its file must be written (with a stream, frames
 /// whose files are up to date are still rendered for the stream but not rewritten).
@@ -142,7 +143,7 @@ pub(crate) fn run_on(
         .take()
         .unwrap_or_else(|| Box::new(std::io::stdout()));
     let mut d = Delivery::new(&batch, progress, out);
-    let spawn = spawner(pool, &batch, &d.cancel, tx);
+    let renderer = renderer(&batch, &d.cancel, tx);
     let mut pending = batch.tasks.iter().copied();
     let mut in_flight = 0;
     loop {
@@ -152,7 +153,8 @@ pub(crate) fn run_on(
         while d.stop.is_none() && in_flight + d.held_for_order() < window {
             let Some(task) = pending.next() else { break };
             if d.claim(task.frame) {
-                spawn(task);
+                d.started(task.frame);
+                renderer.queue(pool, task);
                 in_flight += 1;
             }
         }
@@ -172,34 +174,26 @@ pub(crate) fn run_on(
     d.finish()
 }
 
-/// Starts one frame on the pool; its result comes back through `tx`.
-fn spawner<'a>(
-    pool: &'a rayon::ThreadPool,
+/// What renders the batch's frames, in turn; their results come back through `tx`.
+fn renderer(
     batch: &Batch,
     cancel: &Arc<AtomicBool>,
     tx: mpsc::Sender<(u64, Produced)>,
-) -> impl Fn(Task) + 'a {
+) -> Arc<Renderer> {
     let seq = Arc::clone(&batch.sequence);
-    let world = Arc::new(World::new(seq.scene.clone()));
-    let files = batch.files.clone();
-    let identity = files.as_ref().map(|f| RunIdentity::new(&seq, &f.format));
-    let (stream, cancel) = (batch.stream, Arc::clone(cancel));
-    move |task| {
-        let (tx, seq, world, cancel) = (
-            tx.clone(),
-            Arc::clone(&seq),
-            Arc::clone(&world),
-            Arc::clone(&cancel),
-        );
-        let files = files.clone();
-        pool.spawn(move || {
-            let files = files.as_ref().zip(identity.as_ref());
-            let _ = tx.send((
-                task.frame,
-                produce(&world, &seq, task, files, stream, &cancel),
-            ));
-        });
-    }
+    let files = (batch.files.clone()).map(|f| {
+        let identity = RunIdentity::new(&seq, &f.format);
+        (f, identity)
+    });
+    Arc::new(Renderer {
+        world: World::new(seq.scene.clone()),
+        seq,
+        files,
+        stream: batch.stream,
+        cancel: Arc::clone(cancel),
+        results: tx,
+        queue: Mutex::new(Default::default()),
+    })
 }
 
 /// Renders frame `n` of the sequence (building its geometry; a run builds it once).

@@ -78,6 +78,9 @@ pub struct Sequence {
     pub scene: Scene,
     pub timeline: Timeline,
     pub settings: Settings,
+    /// The names of `materials:`, in the order of the first `Scene::materials` (those written
+    /// inline in objects follow them there, unnamed).
+    pub(crate) material_names: Vec<String>,
     /// Output pattern; a run of `#` stands for the zero-padded frame number.
     pub(crate) output: String,
     /// The file's `render.quality`, if any (draft also halves the resolution).
@@ -300,6 +303,7 @@ fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Opt
         name: name.to_string(),
         scene,
         settings,
+        material_names: raw.materials.0.iter().map(|(n, _)| n.clone()).collect(),
         output: output_of(raw.output, name, &timeline)?,
         quality: raw.render.quality,
         explicit,
