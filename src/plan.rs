@@ -14,7 +14,6 @@ use crate::frameset::FrameSet;
 use crate::output::record::{self, Difference};
 use crate::output::{self, Existing, Expected, Files, RunIdentity};
 use crate::sequence::Sequence;
-use crate::shutter::FrameView;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -134,7 +133,7 @@ impl Job<'_> {
     /// The state of frame `n`'s file.
     fn state(&self, n: u64) -> State {
         let seq = self.seq;
-        let view = FrameView::for_settings(&seq.timeline, &seq.settings, n);
+        let view = seq.settings.frame_view(&seq.timeline, n);
         let path = self.files.frame_path(n);
         let ours = |f: &str| f == self.identity.fingerprint(&view);
         let differs = || {

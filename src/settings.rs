@@ -3,7 +3,7 @@
 //! from the file, the job overrides from the command line, the tracer renders with and the
 //! fingerprint encodes; it lives here, below all of them, so none imports another for it.
 
-use crate::shutter::Shutter;
+use crate::shutter::{FrameView, Shutter};
 use crate::transfer::Encoding;
 
 /// What decides a frame besides the scene and the camera.
@@ -163,4 +163,12 @@ pub enum Sampler {
     Stratified,
     /// Independent uniform positions, kept to measure what stratification buys.
     Random,
+}
+
+impl Settings {
+    /// Frame `n` of `timeline` as these settings render it: through their shutter, and with
+    /// the next frame's camera when the motion pass is asked for.
+    pub(crate) fn frame_view(&self, timeline: &crate::timeline::Timeline, n: u64) -> FrameView {
+        FrameView::with_next(timeline, self.shutter, self.aov.has(Aov::Motion), n)
+    }
 }

@@ -12,7 +12,6 @@
 //! keyframed camera costs about 2 µs to evaluate, far too much for every sample.
 
 use crate::camera::{Camera, Degenerate, Pose};
-use crate::settings::{Aov, Settings};
 use crate::timeline::Timeline;
 use glam::DVec3;
 
@@ -60,7 +59,7 @@ pub(crate) struct FrameView {
     pub(crate) pose: Pose,
     pub(crate) exposure: Result<Exposure, NoCamera>,
     /// The pinhole camera one frame later, for the motion pass: set only when the settings
-    /// ask for it (`for_settings`).
+    /// ask for it (`Settings::frame_view`).
     pub(crate) next: Option<Camera>,
 }
 
@@ -82,15 +81,18 @@ impl FrameView {
         }
     }
 
-    /// Frame `n` as `settings` render it: `of_frame`, and with the motion pass the camera at
-    /// the time of frame n + 1 (what the timeline gives there, beyond the last frame too: keys
-    /// hold still after the last one, an orbit goes on turning). Should that camera not exist,
-    /// the frame's own stands in (no motion).
-    pub(crate) fn for_settings(timeline: &Timeline, settings: &Settings, n: u64) -> FrameView {
-        let mut view = FrameView::of_frame(timeline, settings.shutter, n);
-        if settings.aov.has(Aov::Motion)
-            && let Ok(e) = &view.exposure
-        {
+    /// Frame `n`, and when `next` (the motion pass) the camera at the time of frame n + 1
+    /// (what the timeline gives there, beyond the last frame too: keys hold still after the
+    /// last one, an orbit goes on turning). Should that camera not exist, the frame's own
+    /// stands in (no motion).
+    pub(crate) fn with_next(
+        timeline: &Timeline,
+        shutter: Option<Shutter>,
+        next: bool,
+        n: u64,
+    ) -> FrameView {
+        let mut view = FrameView::of_frame(timeline, shutter, n);
+        if next && let Ok(e) = &view.exposure {
             let (pose, _) = timeline.view_at(timeline.time_of(n.saturating_add(1)));
             view.next = Some(Camera::new(&pose).unwrap_or(Camera {
                 lens_radius: 0.0,

@@ -6,6 +6,7 @@ mod grain;
 mod meshes;
 mod render;
 mod tools;
+mod video;
 
 use crate::cli::job::JobError;
 use crate::cli::{Cli, Command};

@@ -20,7 +20,6 @@ use crate::output::{EncodeError, Files, RunIdentity, stream::StreamFormat};
 use crate::progress::Progress;
 use crate::sequence::Sequence;
 use crate::settings::Settings;
-use crate::shutter::FrameView;
 use crate::tracer::{self, World};
 use delivery::Delivery;
 use std::io::Write;
@@ -208,7 +207,7 @@ pub(crate) fn render_with(
     n: u64,
     settings: &Settings,
 ) -> Result<Frame, RunError> {
-    let view = FrameView::for_settings(&seq.timeline, settings, n);
+    let view = settings.frame_view(&seq.timeline, n);
     let exposure =
         (view.exposure.as_ref()).map_err(|&source| RunError::Camera { frame: n, source })?;
     let mut frame = tracer::render(world, exposure, settings, n);

@@ -65,7 +65,7 @@ impl Renderer {
         };
         let Some(task) = task else { return };
         let start = Instant::now();
-        let view = FrameView::for_settings(&self.seq.timeline, &self.seq.settings, task.frame);
+        let view = self.seq.settings.frame_view(&self.seq.timeline, task.frame);
         let rendered = self.render(task.frame, &view);
         let me = Arc::clone(&self);
         rayon::spawn(move || me.render_next());

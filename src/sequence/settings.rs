@@ -22,12 +22,13 @@ impl Explicit {
         if glass {
             s.max_depth = s.max_depth.max(GLASS_DEPTH);
         }
-        if let Some(d) = self.max_depth {
-            s.max_depth = d;
-        }
-        if let Some(n) = self.samples {
-            s.samples = n;
-        }
+        self.apply(s);
+    }
+
+    /// The file's own values over `s`'s.
+    fn apply(&self, s: &mut Settings) {
+        s.max_depth = self.max_depth.unwrap_or(s.max_depth);
+        s.samples = self.samples.unwrap_or(s.samples);
         if self.adaptive.is_some() {
             s.adaptive = self.adaptive;
         }
@@ -66,29 +67,10 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<(Settings, Explicit)> {
         default_sampling(&mut s);
     }
     pixels(s.width, s.height).or_else(|m| invalid("render.width", m))?;
-    let explicit = Explicit {
-        max_depth: match r.max_depth {
-            Some(d) => Some(check("render.max_depth", max_depth(d))?),
-            None => None,
-        },
-        samples: match r.samples {
-            Some(n) => Some(check("render.samples", samples(n))?),
-            None => None,
-        },
-        adaptive: match &r.adaptive {
-            Some(a) => Some(adaptive(a)?),
-            None => None,
-        },
-    };
+    let explicit = explicit(r)?;
     match r.quality {
         Some(q) => explicit.preset(&mut s, q, false),
-        None => {
-            s.max_depth = explicit.max_depth.unwrap_or(s.max_depth);
-            s.samples = explicit.samples.unwrap_or(s.samples);
-            if explicit.adaptive.is_some() {
-                s.adaptive = explicit.adaptive;
-            }
-        }
+        None => explicit.apply(&mut s),
     }
     if let Some(a) = s.adaptive
         && a.max_samples <= s.samples
@@ -103,6 +85,25 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<(Settings, Explicit)> {
         );
     }
     Ok((s, explicit))
+}
+
+/// `render.max_depth`, `render.samples` and `render.adaptive` where the file sets them.
+fn explicit(r: &raw::Render) -> Check<Explicit> {
+    let check = |path: &str, r: Result<u32, String>| r.or_else(|m| invalid(path, m));
+    Ok(Explicit {
+        max_depth: match r.max_depth {
+            Some(d) => Some(check("render.max_depth", max_depth(d))?),
+            None => None,
+        },
+        samples: match r.samples {
+            Some(n) => Some(check("render.samples", samples(n))?),
+            None => None,
+        },
+        adaptive: match &r.adaptive {
+            Some(a) => Some(adaptive(a)?),
+            None => None,
+        },
+    })
 }
 
 /// `render.adaptive`: its threshold in (0, 1] and its most samples, or their defaults.
