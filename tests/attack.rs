@@ -94,6 +94,46 @@ fn check(dir: &Path, name: &str, yaml: &str) -> std::process::Output {
     run_in(dir, &["check", name])
 }
 
+/// Numbers serde_yaml takes as another type (issue 29): a negative sample count, a hexadecimal
+/// or octal radius were once told to drop a tag and quotes they never had; a value just over
+/// a limit is shown as written, not rounded onto the limit.
+#[test]
+fn numbers_of_the_wrong_kind_are_named_as_written() {
+    let tmp = scratch("number-kinds");
+    let keys = "timeline:\n  keyframes:\n    - { time: 0 }\n";
+    let cases = [
+        (
+            ("width: 32,", "width: 32, samples: -1,"),
+            "render.samples: must be a whole number, 0 or more, got -1",
+        ),
+        (
+            ("radius: 0.5", "radius: 0x10"),
+            "radius: hexadecimal numbers are not accepted, write 16 (got 0x10)",
+        ),
+        (
+            ("radius: 0.5", "radius: 0o17"),
+            "radius: octal numbers are not accepted, write 15 (got 0o17)",
+        ),
+        (
+            (
+                "look_at: [0, 0, 0] }",
+                "look_at: [0, 0, 0], fov: 360.0001 }",
+            ),
+            "(got 360.0001)",
+        ),
+    ];
+    for (i, ((from, to), needle)) in cases.into_iter().enumerate() {
+        let yaml = format!("{}{keys}", STILL.replacen(from, to, 1));
+        let out = check(&tmp, &format!("n{i}.yaml"), &yaml);
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        let said = stderr(&out);
+        assert!(
+            said.contains(needle) && !said.contains("tagged"),
+            "{needle}: {said}"
+        );
+    }
+}
+
 #[test]
 fn messages_read_well_whatever_the_file_holds() {
     let tmp = scratch("messages");
