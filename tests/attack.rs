@@ -588,6 +588,52 @@ lights:
   - point: { position: [0, 0.5, 0], diffuse: [1, 1, 1], specular: [1, 1, 1] }
 ";
 
+/// Glass balls nested five deep: each glass surface reflects and transmits, so an eye sample
+/// traces a tree, not a path. The bound once counted max_depth rays a sample (1.33e11 for the
+/// job, no warning) while the tree holds up to 2^20 − 1, cut at the tracer's budget of 1024:
+/// 140× the time the bound implied. Now the bound counts the tree and the warning fires.
+#[test]
+fn check_counts_a_glass_tree_in_the_cost() {
+    let tmp = scratch("glass-cost");
+    let balls: String = (1..=5)
+        .map(|i| {
+            format!(
+                "  - sphere: {{ center: [0, 0, -3], radius: {}, material: glass }}\n",
+                6 - i
+            )
+        })
+        .collect();
+    let yaml = format!(
+        "render: {{ width: 640, height: 360, samples: 4, max_depth: 20 }}
+camera: {{ position: [0, 0, 6], look_at: [0, 0, -3] }}
+materials:
+  glass: {{ diffuse: [0, 0, 0], transmission: [0.9, 0.9, 0.9], ior: 1.5, reflection: 0.1 }}
+objects:
+{balls}lights:
+  - point: {{ position: [5, 5, 5], diffuse: [1, 1, 1], specular: [1, 1, 1] }}
+timeline: {{ fps: 24, keyframes: [ {{ time: 0 }}, {{ time: 30 }} ] }}
+"
+    );
+    std::fs::write(tmp.join("nested.yaml"), yaml).unwrap();
+    let check = run_in(&tmp, &["check", "nested.yaml"]);
+    assert!(check.status.success(), "{}", stderr(&check));
+    let summary = String::from_utf8_lossy(&check.stdout).into_owned();
+    // 640×360 pixels × 4 samples × (1 + 1 light) × 1024 surfaces, for 721 frames.
+    let frame = 640.0 * 360.0 * 4.0 * 2.0 * 1024.0;
+    assert!(
+        summary.contains(&format!(
+            "up to {frame:.2e} rays a frame, {:.2e} for 721 frames",
+            frame * 721.0
+        )),
+        "{summary}"
+    );
+    assert!(
+        stderr(&check).contains("warning: this job may trace up to"),
+        "{}",
+        stderr(&check)
+    );
+}
+
 #[test]
 fn one_sigterm_stops_a_monstrous_frame_within_seconds() {
     let tmp = scratch("monstrous");
