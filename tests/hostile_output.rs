@@ -427,3 +427,63 @@ fn the_ffmpeg_line_names_files_with_newlines_and_tabs_exactly() {
     let input = words.iter().position(|w| w == "-i").expect("-i") + 1;
     assert_eq!(words[input], format!("{dir}/f_%04d.png"), "{line}");
 }
+
+/// An 8192×8192 EXR with alpha and depth under a 3 GB address-space limit (issue 29): it once
+/// rendered until an allocation failed and aborted with a backtrace (exit 134). Its memory is
+/// now worked out before the first frame: about 3.2 GB a frame does not fit, so the run is
+/// refused at once, naming the limit; a size that fits two frames at a time runs with a note.
+#[test]
+fn a_job_that_cannot_fit_in_memory_is_refused_before_it_starts() {
+    if !have_tool("prlimit") {
+        return;
+    }
+    let tmp = scratch("memory-limit");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let started = std::time::Instant::now();
+    let big = "\"$RAYREEL\" render seq.yaml --size 8192x8192 --alpha --depth --frames 0-3 --threads 2 -o big_####.exr";
+    let out = sh(&tmp, &format!("prlimit --as=3000000000 {big}"));
+    let said = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{said}");
+    assert!(started.elapsed().as_secs() < 20, "{said}");
+    assert!(
+        said.contains("not enough memory: one frame needs about 3.")
+            && said.contains("under RLIMIT_AS (ulimit -v)")
+            && !said.contains("panicked"),
+        "{said}"
+    );
+    assert!(files(&tmp).iter().all(|f| !f.starts_with("big_")));
+    // 1024×1024 with alpha and depth: about 50 MB a frame. Raising the limit from below what the
+    // process maps (about 1.7 GB here, most of it reserved for threads' arenas), each run is
+    // refused until one renders all four frames, never aborting; that one keeps fewer frames
+    // in flight than the 4 two threads would.
+    let mut shrunk = false;
+    for mb in (1200..=3000).step_by(25) {
+        let out = sh(
+            &tmp,
+            &format!(
+                "prlimit --as={mb}000000 \"$RAYREEL\" render seq.yaml --size 1024x1024 --alpha --depth --frames 0-3 --threads 2 -o fit{mb}_####.exr"
+            ),
+        );
+        let said = stderr(&out);
+        match out.status.code() {
+            Some(0) => assert_eq!(
+                files(&tmp)
+                    .iter()
+                    .filter(|f| f.starts_with(&format!("fit{mb}_")))
+                    .count(),
+                4
+            ),
+            Some(1) => assert!(
+                said.contains("not enough memory: one frame needs about 0.05 GB"),
+                "{mb} MB: {said}"
+            ),
+            code => panic!("{mb} MB: exit {code:?}: {said}"),
+        }
+        assert!(!said.contains("memory allocation"), "{mb} MB: {said}");
+        shrunk |= said.contains("at a time instead of 4");
+        if out.status.success() {
+            break;
+        }
+    }
+    assert!(shrunk, "no limit made the run keep fewer frames in flight");
+}
