@@ -487,3 +487,28 @@ fn a_job_that_cannot_fit_in_memory_is_refused_before_it_starts() {
     }
     assert!(shrunk, "no limit made the run keep fewer frames in flight");
 }
+
+/// A 920-byte EXR at a frame's name whose header claims 262144×3 pixels in 4 channels (found
+/// by the `frame_files` fuzzer): the frame check once decoded what the header claimed, 2 GB,
+/// and under a 1.5 GB limit aborted. The header alone now decides: a stale frame (it carries
+/// a fingerprint, not this job's).
+#[test]
+fn a_frame_file_whose_header_claims_gigabytes_is_judged_by_its_header() {
+    if !have_tool("prlimit") {
+        return;
+    }
+    let tmp = scratch("exr-header-claims");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let fixture = repo().join("tests/fixtures/fuzz/frame_files/exr_header_claims_2gb.exr");
+    std::fs::copy(fixture, tmp.join("f_0000.exr")).unwrap();
+    let out = sh(
+        &tmp,
+        "prlimit --as=1500000000 \"$RAYREEL\" status seq.yaml -o f_####.exr --frames 0",
+    );
+    let said = format!("{}{}", String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert_eq!(out.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains("1 stale") && !said.contains("memory allocation"),
+        "{said}"
+    );
+}
