@@ -296,6 +296,30 @@ fn exr_frame_rates_are_exact_and_a_new_rate_makes_frames_stale() {
     }
 }
 
+/// A PNG frame states its time in a text chunk (`rayreel:time`); its fingerprint once did not
+/// cover it, so a new fps with a still camera left frames up to date that claim the old time.
+/// Now it does: they are stale, and the rerun writes the true time.
+#[test]
+fn png_frames_whose_stated_time_changes_are_stale() {
+    let tmp = scratch("png-time");
+    let args = ["seq.yaml", "-o", "out/f_####.png", "--frames", "1-2"];
+    std::fs::write(tmp.join("seq.yaml"), still_at("24")).unwrap();
+    let run = run_in(&tmp, &[&["render"], &args[..]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    std::fs::write(tmp.join("seq.yaml"), still_at("25")).unwrap();
+    let status = run_in(&tmp, &[&["status"], &args[..]].concat());
+    let listing = String::from_utf8_lossy(&status.stdout);
+    assert!(listing.contains("stale       1-2"), "{listing}");
+    let run = run_in(&tmp, &[&["render"], &args[..]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let bytes = std::fs::read(tmp.join("out/f_0001.png")).unwrap();
+    let key = b"rayreel:time\0";
+    let at = bytes.windows(key.len()).position(|w| w == key).unwrap() + key.len();
+    // 1/25 s, not 1/24 (0.041666…).
+    let time = &bytes[at..at + 5];
+    assert!(time.starts_with(b"0.04") && time != b"0.041", "{time:?}");
+}
+
 #[test]
 fn half_floats_hold_65504_where_the_light_is_brighter_with_one_warning() {
     let tmp = scratch("half-inf");
