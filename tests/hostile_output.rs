@@ -536,3 +536,24 @@ fn a_frame_file_whose_header_claims_gigabytes_is_judged_by_its_header() {
         "{said}"
     );
 }
+
+/// A claim whose owner line is empty (or unreadable) held a waiting run, whose line showed it
+/// as `(, heartbeat 0 s ago)`; it now says the owner is unknown.
+#[test]
+fn a_claim_with_no_owner_line_is_shown_as_owner_unknown() {
+    let tmp = scratch("claim-empty-owner");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let out = tmp.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join(".f_0002.png.rayreel-claim"), "").unwrap();
+    let args = [&["render"], &FRAMES[..], &["--claim", "--threads", "1"]].concat();
+    let mut child = start(&tmp, &args);
+    let err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let waiting = std::io::BufRead::lines(err)
+        .map(|l| l.unwrap())
+        .find(|l| l.contains("waiting for 1 frame (2)"));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let line = waiting.expect("the run waits on the claim");
+    assert!(line.contains("(owner unknown, heartbeat "), "{line}");
+}
