@@ -383,8 +383,12 @@ fn check_every_frame(t: &Timeline, shutter: Option<Shutter>) -> Check<()> {
 }
 
 /// Halvings of the time between two checked cameras at most, and the turn of the right vector
-/// below which a piece is not halved again (its roll is then measured directly).
-const ROLL_HALVINGS: u32 = 24;
+/// below which a piece is not halved again (its roll is then measured directly). A piece's
+/// roll is measured well however small it is (a pass by up turns the right vector half round
+/// while the view barely moves); halving only keeps a fast pan's pieces short enough that
+/// carrying the right vector along the view's shortest turn follows the pan. Six halvings
+/// resolve a pan of 320° a frame in 5° pieces and cost at most 127 cameras for a frame.
+const ROLL_HALVINGS: u32 = 6;
 const SMOOTH_TURN_DEGREES: f64 = 5.0;
 
 /// Whether the camera rolls over between `a` and `b` (two checked cameras, each with its time):
