@@ -53,7 +53,7 @@ pub fn render_tiny(text: &str) {
 
 /// Attacker-written bytes at a frame's name, read as each format's frame check reads them,
 /// and at a claim's name, read as a waiting or taking-over process reads them: an answer,
-/// never a panic; a fingerprint only from a file that says it is ours.
+/// never a panic.
 pub fn frame_and_claim_files(bytes: &[u8]) {
     let formats = [
         FileFormat::Png {
@@ -71,13 +71,12 @@ pub fn frame_and_claim_files(bytes: &[u8]) {
             format,
             alpha: bytes.len().is_multiple_of(3),
         };
-        let answer = match format {
+        // Any answer will do. (A file whose fingerprint text is empty is ours and stale: it
+        // carries our key, and rayreel never writes an empty one, so it is re-rendered.)
+        let _: Existing = match format {
             FileFormat::Png { .. } => png::inspect(bytes, &expected),
             FileFormat::Exr { .. } => exr::inspect(bytes, &expected),
         };
-        if let Existing::Ours(f) | Existing::Damaged { fingerprint: f, .. } = &answer {
-            assert!(!f.is_empty(), "{answer:?}");
-        }
         let _ = png::header_fingerprint(bytes);
         let _ = exr::header_fingerprint(bytes);
     }
