@@ -28,7 +28,7 @@ pub enum Degenerate {
     #[error("fov must be in (0, 180) degrees")]
     Fov,
     #[error(
-        "the view swings past up since the previous frame, so the camera rolls over (more than 60° in one frame); move the path or look_at away from the up axis, or change up"
+        "the view swings past up since the previous frame, so the camera rolls over (its picture turns more than 60° about the view axis); move the path or look_at away from the up axis, or change up"
     )]
     Flip,
 }

@@ -96,6 +96,12 @@ impl Owner {
     }
 }
 
+/// Whether the writer of an owner line, as a claim file holds it, is gone from this host: the
+/// judgement a waiting process makes on whatever bytes stand in a claim (fuzzed in `fuzzing`).
+pub(crate) fn judge_owner_line(line: &str) -> bool {
+    Owner::parse(line).gone_from_here()
+}
+
 /// Both known, and not the same.
 fn differs<T: PartialEq>(recorded: &Option<T>, now: Option<T>) -> bool {
     recorded.is_some() && now.is_some() && *recorded != now

@@ -27,6 +27,8 @@ pub mod commands;
 pub mod console;
 pub mod frame;
 mod frameset;
+#[doc(hidden)]
+pub mod fuzzing;
 mod lanes;
 pub mod output;
 mod pattern;

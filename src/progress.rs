@@ -174,10 +174,16 @@ impl Progress {
         let claims: Vec<String> = claims
             .iter()
             .map(|h| match h.heartbeat {
+                // An owner line that cannot be read (permissions, or empty) is said so, not
+                // shown as nothing before the comma.
                 Some(age) => format!(
                     "{} ({}, heartbeat {:.0} s ago)",
                     h.path.display(),
-                    h.owner,
+                    if h.owner.is_empty() {
+                        "owner unknown"
+                    } else {
+                        &h.owner
+                    },
                     age.as_secs_f64()
                 ),
                 None => format!("{} (released just now)", h.path.display()),

@@ -102,6 +102,15 @@ impl Aov {
         Aov::Position,
     ];
 
+    /// How many channels the pass writes.
+    pub fn channels(self) -> u64 {
+        match self {
+            Aov::Id => 1,
+            Aov::Motion => 2,
+            _ => 3,
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Aov::Normal => "normal",

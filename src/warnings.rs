@@ -62,10 +62,10 @@ pub(crate) fn precision_warnings(seq: &Sequence) -> Vec<String> {
     }
     let t = &seq.timeline;
     let limits = checked_frames(seq).into_iter().map(|n| {
-        let camera = Exposure::of_frame(t, None, n).ok().map(|e| e.camera);
+        let exposure = Exposure::of_frame(t, seq.settings.shutter, n).ok();
         (
             n,
-            camera.and_then(|c| f32_limit(&seq.scene, &c, &seq.settings)),
+            exposure.and_then(|e| f32_limit(&seq.scene, &e, &seq.settings)),
         )
     });
     let mut runs: Vec<(u64, u64, Unresolved)> = Vec::new();
@@ -73,7 +73,9 @@ pub(crate) fn precision_warnings(seq: &Sequence) -> Vec<String> {
         match (runs.last_mut(), limit) {
             (Some((_, last, worst)), Some(u)) if worst.what == u.what => {
                 *last = n;
-                worst.pixels = worst.pixels.max(u.pixels);
+                if u.excess() > worst.excess() {
+                    *worst = u;
+                }
             }
             (_, Some(u)) => runs.push((n, n, u)),
             (_, None) => {}

@@ -94,6 +94,46 @@ fn check(dir: &Path, name: &str, yaml: &str) -> std::process::Output {
     run_in(dir, &["check", name])
 }
 
+/// Numbers serde_yaml takes as another type (issue 29): a negative sample count, a hexadecimal
+/// or octal radius were once told to drop a tag and quotes they never had; a value just over
+/// a limit is shown as written, not rounded onto the limit.
+#[test]
+fn numbers_of_the_wrong_kind_are_named_as_written() {
+    let tmp = scratch("number-kinds");
+    let keys = "timeline:\n  keyframes:\n    - { time: 0 }\n";
+    let cases = [
+        (
+            ("width: 32,", "width: 32, samples: -1,"),
+            "render.samples: must be a whole number, 0 or more, got -1",
+        ),
+        (
+            ("radius: 0.5", "radius: 0x10"),
+            "radius: hexadecimal numbers are not accepted, write 16 (got 0x10)",
+        ),
+        (
+            ("radius: 0.5", "radius: 0o17"),
+            "radius: octal numbers are not accepted, write 15 (got 0o17)",
+        ),
+        (
+            (
+                "look_at: [0, 0, 0] }",
+                "look_at: [0, 0, 0], fov: 360.0001 }",
+            ),
+            "(got 360.0001)",
+        ),
+    ];
+    for (i, ((from, to), needle)) in cases.into_iter().enumerate() {
+        let yaml = format!("{}{keys}", STILL.replacen(from, to, 1));
+        let out = check(&tmp, &format!("n{i}.yaml"), &yaml);
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        let said = stderr(&out);
+        assert!(
+            said.contains(needle) && !said.contains("tagged"),
+            "{needle}: {said}"
+        );
+    }
+}
+
 #[test]
 fn messages_read_well_whatever_the_file_holds() {
     let tmp = scratch("messages");
@@ -547,6 +587,52 @@ objects:
 lights:
   - point: { position: [0, 0.5, 0], diffuse: [1, 1, 1], specular: [1, 1, 1] }
 ";
+
+/// Glass balls nested five deep: each glass surface reflects and transmits, so an eye sample
+/// traces a tree, not a path. The bound once counted max_depth rays a sample (1.33e11 for the
+/// job, no warning) while the tree holds up to 2^20 − 1, cut at the tracer's budget of 1024:
+/// 140× the time the bound implied. Now the bound counts the tree and the warning fires.
+#[test]
+fn check_counts_a_glass_tree_in_the_cost() {
+    let tmp = scratch("glass-cost");
+    let balls: String = (1..=5)
+        .map(|i| {
+            format!(
+                "  - sphere: {{ center: [0, 0, -3], radius: {}, material: glass }}\n",
+                6 - i
+            )
+        })
+        .collect();
+    let yaml = format!(
+        "render: {{ width: 640, height: 360, samples: 4, max_depth: 20 }}
+camera: {{ position: [0, 0, 6], look_at: [0, 0, -3] }}
+materials:
+  glass: {{ diffuse: [0, 0, 0], transmission: [0.9, 0.9, 0.9], ior: 1.5, reflection: 0.1 }}
+objects:
+{balls}lights:
+  - point: {{ position: [5, 5, 5], diffuse: [1, 1, 1], specular: [1, 1, 1] }}
+timeline: {{ fps: 24, keyframes: [ {{ time: 0 }}, {{ time: 30 }} ] }}
+"
+    );
+    std::fs::write(tmp.join("nested.yaml"), yaml).unwrap();
+    let check = run_in(&tmp, &["check", "nested.yaml"]);
+    assert!(check.status.success(), "{}", stderr(&check));
+    let summary = String::from_utf8_lossy(&check.stdout).into_owned();
+    // 640×360 pixels × 4 samples × (1 + 1 light) × 1024 surfaces, for 721 frames.
+    let frame = 640.0 * 360.0 * 4.0 * 2.0 * 1024.0;
+    assert!(
+        summary.contains(&format!(
+            "up to {frame:.2e} rays a frame, {:.2e} for 721 frames",
+            frame * 721.0
+        )),
+        "{summary}"
+    );
+    assert!(
+        stderr(&check).contains("warning: this job may trace up to"),
+        "{}",
+        stderr(&check)
+    );
+}
 
 #[test]
 fn one_sigterm_stops_a_monstrous_frame_within_seconds() {

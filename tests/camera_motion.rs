@@ -431,3 +431,41 @@ fn an_independent_implementation_of_the_readme_agrees_to_1e_9() {
         }
     }
 }
+
+/// A camera that turns more than 60° in one frame (issue 29): a whip pan, or an orbit at
+/// `fps: 0.5` (120° a frame), was refused as rolling over through up, naming "keyframes 1 and
+/// 1". A pan turns continuously, so it renders; a view that really swings past up between two
+/// frames is still refused, naming that frame and the keys around it.
+#[test]
+fn whip_pans_render_and_only_true_roll_overs_are_refused() {
+    let tmp = scratch("whip-pan");
+    let slow_orbit = "timeline:\n  fps: 0.5\n  orbit: { center: [-0.1, 0, -0.6], radius: 1.6, height: 0.35, duration: 6, look_at: [-0.1, -0.1, -0.6] }\n";
+    let keys = |first: &str, second: &str| {
+        format!(
+            "timeline:\n  fps: 24\n  keyframes:\n    - {{ time: 0, position: [0, 0.3, 2], look_at: {first} }}\n    - {{ time: 0.05, look_at: {second} }}\n    - {{ time: 1 }}\n"
+        )
+    };
+    let whip = keys("[0, 0.3, 1]", "[1, 0.3, 2]");
+    for (name, timeline) in [("orbit.yaml", slow_orbit.to_string()), ("whip.yaml", whip)] {
+        std::fs::write(tmp.join(name), sequence(32, 18, &timeline)).unwrap();
+        let out = run_in(
+            &tmp,
+            &["render", name, "-q", "-o", &format!("{name}_####.png")],
+        );
+        assert!(out.status.success(), "{name}: {}", stderr(&out));
+    }
+    // Over the top: from just before up to just past it, in one frame.
+    std::fs::write(
+        tmp.join("over.yaml"),
+        sequence(32, 18, &keys("[0.001, 1.3, 2.1]", "[0.001, 1.3, 1.9]")),
+    )
+    .unwrap();
+    let out = run_in(&tmp, &["check", "over.yaml"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let said = stderr(&out);
+    assert!(
+        said.contains("frame 1 (")
+            && said.contains("between keyframes 0 and 1: the view swings past up"),
+        "{said}"
+    );
+}

@@ -3,6 +3,7 @@
 //! may panic or take a second, so a fixed crash stays fixed without libFuzzer or nightly.
 
 use rayreel::cli::parse_frame_spec;
+use rayreel::fuzzing;
 use rayreel::sequence;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
@@ -22,6 +23,15 @@ fn inputs(dir: &str) -> Vec<PathBuf> {
 /// Runs `call` on every file of `dir` (as UTF-8 text, like the fuzz targets), collecting every
 /// panic and every call that takes a second or more.
 fn replay(dir: &str, min_files: usize, call: impl Fn(&str)) {
+    replay_bytes(dir, min_files, |bytes| {
+        if let Ok(text) = std::str::from_utf8(bytes) {
+            call(text)
+        }
+    })
+}
+
+/// `replay` on the files' bytes as they are.
+fn replay_bytes(dir: &str, min_files: usize, call: impl Fn(&[u8])) {
     let files = inputs(dir);
     assert!(
         files.len() >= min_files,
@@ -31,11 +41,8 @@ fn replay(dir: &str, min_files: usize, call: impl Fn(&str)) {
     let mut failures = Vec::new();
     for file in &files {
         let bytes = std::fs::read(file).unwrap();
-        let Ok(text) = std::str::from_utf8(&bytes) else {
-            continue;
-        };
         let started = Instant::now();
-        let result = catch_unwind(AssertUnwindSafe(|| call(text)));
+        let result = catch_unwind(AssertUnwindSafe(|| call(&bytes)));
         let took = started.elapsed();
         if result.is_err() {
             failures.push(format!("{}: panicked", file.display()));
@@ -65,4 +72,38 @@ fn frame_spec_corpus() {
     replay("fuzz/corpus/frame_spec", 50, |s| {
         let _ = parse_frame_spec(s).and_then(|spec| spec.frames(0, 999));
     });
+}
+
+/// The fuzz targets past parsing (`render`, `frame_files`, `ffmpeg_words`): their seeds and
+/// kept inputs against the same checks, in `rayreel::fuzzing`.
+#[test]
+fn render_corpus() {
+    replay("fuzz/corpus/sequence", 50, fuzzing::render_tiny);
+}
+
+#[test]
+fn ffmpeg_words_corpus() {
+    replay("fuzz/corpus/ffmpeg_words", 4, fuzzing::ffmpeg_words);
+}
+
+#[test]
+fn frame_files_corpus_and_crashes() {
+    replay_bytes("fuzz/corpus/frame_files", 5, fuzzing::frame_and_claim_files);
+    let before = peak_rss_kb();
+    replay_bytes(
+        "tests/fixtures/fuzz/frame_files",
+        1,
+        fuzzing::frame_and_claim_files,
+    );
+    // A header claiming 2 GB of pixels is judged by its header, never decoded.
+    let grew = peak_rss_kb() - before;
+    assert!(grew < 200 * 1024, "peak RSS grew by {grew} kB");
+}
+
+/// This process's peak resident set, in kB.
+fn peak_rss_kb() -> i64 {
+    // SAFETY: getrusage writes only the struct it is given.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) };
+    usage.ru_maxrss
 }

@@ -296,6 +296,30 @@ fn exr_frame_rates_are_exact_and_a_new_rate_makes_frames_stale() {
     }
 }
 
+/// A PNG frame states its time in a text chunk (`rayreel:time`); its fingerprint once did not
+/// cover it, so a new fps with a still camera left frames up to date that claim the old time.
+/// Now it does: they are stale, and the rerun writes the true time.
+#[test]
+fn png_frames_whose_stated_time_changes_are_stale() {
+    let tmp = scratch("png-time");
+    let args = ["seq.yaml", "-o", "out/f_####.png", "--frames", "1-2"];
+    std::fs::write(tmp.join("seq.yaml"), still_at("24")).unwrap();
+    let run = run_in(&tmp, &[&["render"], &args[..]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    std::fs::write(tmp.join("seq.yaml"), still_at("25")).unwrap();
+    let status = run_in(&tmp, &[&["status"], &args[..]].concat());
+    let listing = String::from_utf8_lossy(&status.stdout);
+    assert!(listing.contains("stale       1-2"), "{listing}");
+    let run = run_in(&tmp, &[&["render"], &args[..]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let bytes = std::fs::read(tmp.join("out/f_0001.png")).unwrap();
+    let key = b"rayreel:time\0";
+    let at = bytes.windows(key.len()).position(|w| w == key).unwrap() + key.len();
+    // 1/25 s, not 1/24 (0.041666…).
+    let time = &bytes[at..at + 5];
+    assert!(time.starts_with(b"0.04") && time != b"0.041", "{time:?}");
+}
+
 #[test]
 fn half_floats_hold_65504_where_the_light_is_brighter_with_one_warning() {
     let tmp = scratch("half-inf");
@@ -426,4 +450,110 @@ fn the_ffmpeg_line_names_files_with_newlines_and_tabs_exactly() {
         .collect();
     let input = words.iter().position(|w| w == "-i").expect("-i") + 1;
     assert_eq!(words[input], format!("{dir}/f_%04d.png"), "{line}");
+}
+
+/// An 8192×8192 EXR with alpha and depth under a 3 GB address-space limit (issue 29): it once
+/// rendered until an allocation failed and aborted with a backtrace (exit 134). Its memory is
+/// now worked out before the first frame: about 3.2 GB a frame does not fit, so the run is
+/// refused at once, naming the limit; a size that fits two frames at a time runs with a note.
+#[test]
+fn a_job_that_cannot_fit_in_memory_is_refused_before_it_starts() {
+    if !have_tool("prlimit") {
+        return;
+    }
+    let tmp = scratch("memory-limit");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let started = std::time::Instant::now();
+    let big = "\"$RAYREEL\" render seq.yaml --size 8192x8192 --alpha --depth --frames 0-3 --threads 2 -o big_####.exr";
+    let out = sh(&tmp, &format!("prlimit --as=3000000000 {big}"));
+    let said = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{said}");
+    assert!(started.elapsed().as_secs() < 20, "{said}");
+    assert!(
+        said.contains("not enough memory: one frame needs about 3.")
+            && said.contains("under RLIMIT_AS (ulimit -v)")
+            && !said.contains("panicked"),
+        "{said}"
+    );
+    assert!(files(&tmp).iter().all(|f| !f.starts_with("big_")));
+    // 1024×1024 with alpha and depth: about 50 MB a frame. Raising the limit from below what the
+    // process maps (about 1.7 GB here, most of it reserved for threads' arenas), each run is
+    // refused until one renders all four frames, never aborting; that one keeps fewer frames
+    // in flight than the 4 two threads would.
+    let mut shrunk = false;
+    for mb in (1200..=3000).step_by(25) {
+        let out = sh(
+            &tmp,
+            &format!(
+                "prlimit --as={mb}000000 \"$RAYREEL\" render seq.yaml --size 1024x1024 --alpha --depth --frames 0-3 --threads 2 -o fit{mb}_####.exr"
+            ),
+        );
+        let said = stderr(&out);
+        match out.status.code() {
+            Some(0) => assert_eq!(
+                files(&tmp)
+                    .iter()
+                    .filter(|f| f.starts_with(&format!("fit{mb}_")))
+                    .count(),
+                4
+            ),
+            Some(1) => assert!(
+                said.contains("not enough memory: one frame needs about 0.05 GB"),
+                "{mb} MB: {said}"
+            ),
+            code => panic!("{mb} MB: exit {code:?}: {said}"),
+        }
+        assert!(!said.contains("memory allocation"), "{mb} MB: {said}");
+        shrunk |= said.contains("at a time instead of 4");
+        if out.status.success() {
+            break;
+        }
+    }
+    assert!(shrunk, "no limit made the run keep fewer frames in flight");
+}
+
+/// A 920-byte EXR at a frame's name whose header claims 262144×3 pixels in 4 channels (found
+/// by the `frame_files` fuzzer): the frame check once decoded what the header claimed, 2 GB,
+/// and under a 1.5 GB limit aborted. The header alone now decides: a stale frame (it carries
+/// a fingerprint, not this job's).
+#[test]
+fn a_frame_file_whose_header_claims_gigabytes_is_judged_by_its_header() {
+    if !have_tool("prlimit") {
+        return;
+    }
+    let tmp = scratch("exr-header-claims");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let fixture = repo().join("tests/fixtures/fuzz/frame_files/exr_header_claims_2gb.exr");
+    std::fs::copy(fixture, tmp.join("f_0000.exr")).unwrap();
+    let out = sh(
+        &tmp,
+        "prlimit --as=1500000000 \"$RAYREEL\" status seq.yaml -o f_####.exr --frames 0",
+    );
+    let said = format!("{}{}", String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert_eq!(out.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains("1 stale") && !said.contains("memory allocation"),
+        "{said}"
+    );
+}
+
+/// A claim whose owner line is empty (or unreadable) held a waiting run, whose line showed it
+/// as `(, heartbeat 0 s ago)`; it now says the owner is unknown.
+#[test]
+fn a_claim_with_no_owner_line_is_shown_as_owner_unknown() {
+    let tmp = scratch("claim-empty-owner");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let out = tmp.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join(".f_0002.png.rayreel-claim"), "").unwrap();
+    let args = [&["render"], &FRAMES[..], &["--claim", "--threads", "1"]].concat();
+    let mut child = start(&tmp, &args);
+    let err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let waiting = std::io::BufRead::lines(err)
+        .map(|l| l.unwrap())
+        .find(|l| l.contains("waiting for 1 frame (2)"));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let line = waiting.expect("the run waits on the claim");
+    assert!(line.contains("(owner unknown, heartbeat "), "{line}");
 }

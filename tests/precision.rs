@@ -137,6 +137,81 @@ fn a_scene_f32_cannot_resolve_is_named_and_traced_in_f64() {
     assert_eq!(render.stdout, f64, "the fallback is the f64 frame");
 }
 
+/// `scene` rendered at `size` in f32 says `warning` and is the f64 frame, byte for byte.
+fn falls_back(dir: &Path, scene: &str, size: &str, warning: &str) {
+    let f32 = run_in(
+        dir,
+        &[
+            "render",
+            scene,
+            "--size",
+            size,
+            "--pipe",
+            "raw",
+            "--precision",
+            "f32",
+        ],
+    );
+    assert!(f32.status.success(), "{}", stderr(&f32));
+    assert!(stderr(&f32).contains(warning), "{scene}: {}", stderr(&f32));
+    let f64 = frames(dir, scene, &["--size", size, "--precision", "f64"]);
+    assert_eq!(f32.stdout, f64, "{scene}: the fallback is the f64 frame");
+}
+
+/// A telephoto shot of spheres small against their distance (r = 3e-6 at 10, fov 5e-4°): E
+/// is under a pixel at 200×112, but each normal is off by u·R/r ≈ 0.02 rad, which left 1.35%
+/// of the pixels more than 2 levels off (max 67) with no word. Now it is traced in f64.
+#[test]
+fn a_telephoto_shot_of_small_spheres_falls_back_to_f64() {
+    let tmp = scratch("precision-telephoto");
+    let scene = "render: { width: 200, height: 112, max_depth: 3 }
+camera: { position: [0, 0.001, 10], look_at: [0, 0, 0], fov: 0.0005 }
+materials:
+  red:   { ambient: [0.1, 0, 0], diffuse: [0.7, 0, 0], specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
+  floor: { ambient: [0.1, 0.1, 0.1], diffuse: [0.6, 0.6, 0.6], specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
+objects:
+  - sphere: { center: [0, 0, 0], radius: 3e-6, material: red }
+  - sphere: { center: [3e-6, 0, 3e-6], radius: 3e-6, material: red }
+  - sphere: { center: [-3e-6, 3e-6, -3e-6], radius: 3e-6, material: red }
+  - plane:  { point: [0, -3e-6, 0], normal: [0, 1, 0], material: floor }
+lights:
+  - point: { position: [5, 5, 5], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }
+timeline: { fps: 24, keyframes: [ { time: 0 } ] }
+";
+    std::fs::write(tmp.join("tele.yaml"), scene).unwrap();
+    let needle = "f32 knows the normals of objects[2] (sphere) only to 1.99e-1 rad";
+    falls_back(&tmp, "tele.yaml", "200x112", needle);
+    let f32 = scene.replacen("max_depth: 3 }", "max_depth: 3, precision: f32 }", 1);
+    std::fs::write(tmp.join("tele32.yaml"), f32).unwrap();
+    let check = stderr(&run_in(&tmp, &["check", "tele32.yaml"]));
+    assert!(check.contains(needle), "{check}");
+}
+
+/// A lens far wider than the scene moves every ray's origin up to half the aperture from the
+/// camera: with aperture 1e8 f32 left 55% of the talk's pixels off, at 1e100 a black frame.
+/// The spread is in every reach, so both are traced in f64 and named.
+#[test]
+fn a_huge_aperture_falls_back_to_f64() {
+    let tmp = scratch("precision-aperture");
+    for (aperture, needle) in [
+        (
+            "1e8",
+            "f32 knows the normals of objects[1] (sphere) only to 2.98e1 rad",
+        ),
+        ("1e100", "objects[0] (sphere) has a size f32 cannot square"),
+    ] {
+        let name = format!("lens{aperture}.yaml");
+        copy(&tmp, "sequences/talk.yaml", &name, |t| {
+            t.replacen(
+                "  fov: 90\n",
+                &format!("  fov: 90\n  aperture: {aperture}\n"),
+                1,
+            )
+        });
+        falls_back(&tmp, &name, "200x112", needle);
+    }
+}
+
 /// f32 frames are other frames: files rendered in f64 are not up to date for an f32 run (and
 /// the other way round); an f32 run keeps the f64 frame (a quality difference, never lowered
 /// unasked), an f64 run re-renders an f32 one.

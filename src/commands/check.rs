@@ -27,9 +27,11 @@ pub(crate) const ENORMOUS_RAYS: f64 = 1e12;
 const RAYS_PER_SECOND: f64 = 3e7;
 
 /// An upper bound on the rays one frame traces: pixels × samples (adaptive: its maximum) ×
-/// (1 + shadow rays per surface) × max_depth, since each surface a path visits sends one ray
-/// on and at most one shadow ray per point, spot or directional light and `samples` per area
-/// light.
+/// (1 + shadow rays per surface) × surfaces per sample, since each surface a path visits
+/// sends at most one shadow ray per point, spot or directional light and `samples` per area
+/// light. A sample visits at most max_depth surfaces on one path; where a material branches
+/// (glass reflects and transmits, Fresnel weighs by angle) its paths become a tree of up to
+/// 2^max_depth − 1 rays, cut at `glass::tree_budget`.
 pub(crate) fn rays_per_frame(seq: &Sequence) -> f64 {
     let s = &seq.settings;
     let samples = s.adaptive.map_or(s.samples, |a| a.max_samples);
@@ -46,7 +48,18 @@ pub(crate) fn rays_per_frame(seq: &Sequence) -> f64 {
         * f64::from(s.height)
         * f64::from(samples)
         * (1 + shadows) as f64
-        * f64::from(s.max_depth)
+        * surfaces_per_sample(seq)
+}
+
+/// The most surfaces one eye sample visits: max_depth, or for a scene whose paths branch the
+/// whole tree of that depth as far as the tracer's budget lets it grow.
+fn surfaces_per_sample(seq: &Sequence) -> f64 {
+    let depth = seq.settings.max_depth;
+    if !seq.scene.materials.iter().any(|m| m.branches()) {
+        return f64::from(depth);
+    }
+    let tree = 2f64.powi(depth.min(64) as i32) - 1.0;
+    tree.min(f64::from(crate::tracer::glass::tree_budget(depth)))
 }
 
 /// `up to 2.76e9 rays a frame, 3.98e11 for 144 frames (…)`, and a warning for an enormous
@@ -55,11 +68,15 @@ pub(crate) fn cost(seq: &Sequence, frames: u64) -> (String, Option<String>) {
     let frame = rays_per_frame(seq);
     let total = frame * frames as f64;
     let line = format!(
-        "up to {frame:.2e} rays a frame, {total:.2e} for {frames} frame{} (pixels × samples × (1 + {}) × max_depth)",
+        "up to {frame:.2e} rays a frame, {total:.2e} for {frames} frame{} (pixels × samples × (1 + {}) × {})",
         if frames == 1 { "" } else { "s" },
         match seq.scene.lights.iter().any(|l| l.area_samples().is_some()) {
             true => "shadow rays: 1 a light, `samples` an area light",
             false => "lights",
+        },
+        match seq.scene.materials.iter().any(|m| m.branches()) {
+            true => "the surfaces of a glass or Fresnel tree: up to 2^max_depth − 1",
+            false => "max_depth",
         }
     );
     let warning = (total > ENORMOUS_RAYS).then(|| {

@@ -329,9 +329,50 @@ fn nearer(p: u128, q: u128, x: (u128, u128), y: (u128, u128)) -> (u128, u128) {
     if y_nearer { y } else { x }
 }
 
+/// The most channels a file is decoded with: rayreel writes at most R, G, B, A and Z, and
+/// every channel costs a plane of the job's size to decode.
+const MAX_CHANNELS: usize = 16;
+
+/// The verdict on a file from its header alone, when the header already decides it: decoding
+/// allocates what the header claims (a 920-byte file claiming 262144×3 pixels in 4 channels
+/// asked for 2 GB, found by the `frame_files` fuzzer), so a file is only decoded when every
+/// part is single, of the job's size, and has few channels.
+fn judged_by_header(bytes: &[u8], expected: &Expected) -> Option<Existing> {
+    let meta = match exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false) {
+        Err(e) => return Some(Existing::Corrupt(format!("unreadable EXR: {e}"))),
+        Ok(meta) => meta,
+    };
+    let header = meta.headers.first()?;
+    let fingerprint = match header
+        .own_attributes
+        .other
+        .get(&Text::from(fingerprint::KEY))
+    {
+        Some(AttributeValue::Text(f)) => f.to_string(),
+        _ => return Some(Existing::Foreign(super::png::NO_FINGERPRINT.into())),
+    };
+    let (w, h) = (header.layer_size.width(), header.layer_size.height());
+    let why = if meta.headers.len() != 1 {
+        format!("{} parts; rayreel writes one", meta.headers.len())
+    } else if (w, h) != (expected.width as usize, expected.height as usize) {
+        format!(
+            "the header says {w}x{h}; this job renders {}x{}",
+            expected.width, expected.height
+        )
+    } else if header.channels.list.len() > MAX_CHANNELS {
+        format!("{} channels", header.channels.list.len())
+    } else {
+        return None;
+    };
+    Some(Existing::Damaged { fingerprint, why })
+}
+
 /// Reads the whole file (EXR has no checksums, so decoding every block is the check); a file
 /// with our fingerprint must also have the job's size and colour channels.
 pub(crate) fn inspect(bytes: &[u8], expected: &Expected) -> Existing {
+    if let Some(verdict) = judged_by_header(bytes, expected) {
+        return verdict;
+    }
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -359,12 +400,10 @@ pub(crate) fn inspect(bytes: &[u8], expected: &Expected) -> Existing {
             ),
         };
     }
-    let float = matches!(
-        expected.format,
-        FileFormat::Exr {
-            precision: ExrPrecision::Float
-        }
-    );
+    let float = expected.format
+        == (FileFormat::Exr {
+            precision: ExrPrecision::Float,
+        });
     let colour = |name: &str| {
         layer.channel_data.list.iter().any(|c| {
             c.name == *name

@@ -82,10 +82,10 @@ pub(crate) fn with_exr_rate(run: &Hasher, (num, den): (i32, u32)) -> Hasher {
 /// samples are seeded from it), its camera pose at the frame time, and what its exposure adds:
 /// the lens when open, and the camera at every instant of the shutter's open interval when the
 /// camera moves while it is open (a still camera gives the same image with a shutter or
-/// without, and the same fingerprint); for an EXR file (`exr_time`), last, the time its header
-/// records (`rayreel:time`), which a change of fps or first frame moves even where the camera
-/// holds still.
-pub(crate) fn of_frame(run: &Hasher, view: &FrameView, exr_time: bool) -> String {
+/// without, and the same fingerprint); last, the time the file records (`rayreel:time`, in a
+/// PNG's text and an EXR's header), which a change of fps or first frame moves even where the
+/// camera holds still: a fingerprint covers everything its file states.
+pub(crate) fn of_frame(run: &Hasher, view: &FrameView) -> String {
     let mut h = *run;
     view.frame.canon(&mut h);
     view.pose.canon(&mut h);
@@ -98,9 +98,7 @@ pub(crate) fn of_frame(run: &Hasher, view: &FrameView, exr_time: bool) -> String
         // Never rendered: the run stops on it.
         Err(_) => tagged(&mut h, 1, &[]),
     }
-    if exr_time {
-        view.time.canon(&mut h);
-    }
+    view.time.canon(&mut h);
     // Only with the motion pass, whose run part already differs (`Settings`).
     if let Some(next) = &view.next {
         h.write(b"next camera");
@@ -517,16 +515,10 @@ mod tests {
         rate.extend(1001u32.to_le_bytes());
         let exr = with_exr_rate(&run, (30000, 1001));
         assert_eq!(exr.hex(), Hasher::new().write(&rate).hex());
-        let view = FrameView::of_frame(&still(0.0, 0.0), None, 1);
-        assert_ne!(of_frame(&exr, &view, true), of_frame(&exr, &view, false));
         // The frame's number, camera and lens each change it; a shutter on a still camera
         // and the compression do not.
         let at = |x, aperture, n, shutter| {
-            of_frame(
-                &run,
-                &FrameView::of_frame(&still(x, aperture), shutter, n),
-                false,
-            )
+            of_frame(&run, &FrameView::of_frame(&still(x, aperture), shutter, n))
         };
         let open = Some(Shutter {
             angle: 180.0,

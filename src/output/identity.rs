@@ -49,8 +49,6 @@ pub(crate) struct RunIdentity {
     record: String,
     fps: (i32, u32),
     size: (u32, u32),
-    /// The file records its frame rate and time in a way the fingerprint covers (EXR).
-    exr: bool,
 }
 
 impl RunIdentity {
@@ -68,20 +66,19 @@ impl RunIdentity {
             },
             fps,
             size: (s.width, s.height),
-            exr,
         }
     }
 
     /// The fingerprint of the frame `view` shows: what its file carries, and what the resume
     /// check compares an existing file with.
     pub(crate) fn fingerprint(&self, view: &FrameView) -> String {
-        fingerprint::of_frame(&self.run, view, self.exr)
+        fingerprint::of_frame(&self.run, view)
     }
 
     /// The settings record of the frame `view` shows: what its file carries, and what the
     /// resume check compares an existing file's record with.
     pub(crate) fn record(&self, view: &FrameView) -> String {
-        record::of_frame(&self.record, view, self.exr)
+        record::of_frame(&self.record, view)
     }
 
     /// Everything the file of the frame `view` shows records about it.

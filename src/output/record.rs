@@ -42,9 +42,9 @@ pub(crate) fn of_run(seq: &Sequence, format: &FileFormat, fps: Option<(i32, u32)
 }
 
 /// The run's lines and, last, the hash of what the fingerprint adds for the frame `view`
-/// shows (its number, camera, exposure and, for EXR, time).
-pub(crate) fn of_frame(run: &str, view: &FrameView, exr_time: bool) -> String {
-    let camera = super::fingerprint::of_frame(&Hasher::new(), view, exr_time);
+/// shows (its number, camera, exposure and time).
+pub(crate) fn of_frame(run: &str, view: &FrameView) -> String {
+    let camera = super::fingerprint::of_frame(&Hasher::new(), view);
     format!("{run}camera={}", &camera[..16])
 }
 

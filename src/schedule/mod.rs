@@ -11,6 +11,7 @@
 //! stream's order and writes it on a thread of its own.
 
 mod delivery;
+pub(crate) mod memory;
 mod stream;
 mod work;
 
@@ -99,8 +100,28 @@ pub enum RunError {
     },
     #[error("stdout: cannot write the stream: {0}")]
     Stream(std::io::Error),
+    #[error("not enough memory: {0}")]
+    Memory(String),
     #[error("worker lost: {0}")]
     WorkerLost(mpsc::RecvTimeoutError),
+}
+
+/// `window` frames in flight, or as many as the memory the process may use holds (saying so),
+/// or an error before any frame starts when not even one does.
+fn memory_window(batch: &Batch, window: usize, progress: &Progress) -> Result<usize, RunError> {
+    let format = batch.files.as_ref().map(|f| f.format);
+    let per_frame = memory::frame_bytes(&batch.sequence.settings, format);
+    let available = memory::available(batch.threads);
+    let fits = memory::fit(window, per_frame, available).map_err(RunError::Memory)?;
+    if let (true, Some((bytes, what))) = (fits < window, available) {
+        progress.note(&format!(
+            "note: {fits} frame{} at a time instead of {window}: each needs about {} and {} is free under {what}",
+            if fits == 1 { "" } else { "s" },
+            memory::gb(per_frame),
+            memory::gb(bytes)
+        ));
+    }
+    Ok(fits)
 }
 
 /// How often the run looks at signals, claims and workers.
@@ -136,6 +157,7 @@ pub(crate) fn run_on(
         Some(_) => 2,
         None => batch.threads + EXTRA_IN_FLIGHT,
     };
+    let window = memory_window(&batch, window, progress)?;
     let (tx, rx) = mpsc::channel::<(u64, Produced)>();
     let out = batch
         .stream_out

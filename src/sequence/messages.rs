@@ -2,7 +2,7 @@
 
 use super::*;
 
-pub(super) fn yaml_error(file: &Path, e: &serde_yaml::Error) -> LoadError {
+pub(super) fn yaml_error(file: &Path, source: &str, e: &serde_yaml::Error) -> LoadError {
     let (line, col) = e.location().map_or((1, 1), |l| (l.line(), l.column()));
     let text = e.to_string();
     // serde_yaml appends " at line L column C" (and libyaml "..., while parsing ... at ...");
@@ -21,7 +21,10 @@ pub(super) fn yaml_error(file: &Path, e: &serde_yaml::Error) -> LoadError {
             "aliases repeat too many nodes (repetition limit exceeded)".into()
         }
         _ => out_of_range(&message)
-            .or_else(|| tagged_number(&message))
+            .or_else(|| {
+                let written = e.location().map_or("", |l| scalar_at(source, l.index()));
+                tagged_number(&message, written)
+            })
             .unwrap_or_else(|| rust_types_in_words(&message)),
     };
     LoadError::Invalid {
@@ -77,19 +80,51 @@ pub(super) fn out_of_range(message: &str) -> Option<String> {
     Some(format!("{field}number out of range (got {s})"))
 }
 
-/// serde_yaml reads a tagged, quoted number (`fps: !!float "24"`) as a number and then refuses
-/// it for the very type it is (`invalid type: floating point `24.0`, expected f64`): say what
-/// to write instead.
-pub(super) fn tagged_number(message: &str) -> Option<String> {
+/// The plain scalar that starts at byte `index` of `text`, as written: up to the end of the
+/// line, a comment, or the `,` `]` `}` that ends it in a flow collection.
+fn scalar_at(text: &str, index: usize) -> &str {
+    let Some(rest) = text.get(index..) else {
+        return "";
+    };
+    let end = rest.find([',', ']', '}', '\n', '#']).unwrap_or(rest.len());
+    rest[..end].trim()
+}
+
+/// serde_yaml reads some numbers as another type than the field takes and then refuses them
+/// for the very type they are (`invalid type: floating point `24.0`, expected f64`): a tagged,
+/// quoted number (`fps: !!float "24"`), a hexadecimal or octal one (`0x10`, which YAML 1.1
+/// reads as 16), or a negative one where only 0 or more fits. Say which, from `written`, the
+/// value as the file has it.
+pub(super) fn tagged_number(message: &str, written: &str) -> Option<String> {
     let (field, rest) = message.split_once(": invalid type: ")?;
-    let value = match rest.strip_prefix("floating point `") {
-        Some(r) => r.strip_suffix("`, expected f64")?,
+    let (value, expected) = match rest.strip_prefix("floating point `") {
+        Some(r) => (r.strip_suffix("`, expected f64")?, "f64"),
         None => {
             let (value, expected) = rest.strip_prefix("integer `")?.split_once("`, expected ")?;
-            ["f64", "u64", "i64"].contains(&expected).then_some(value)?
+            (
+                ["f64", "u64", "i64"].contains(&expected).then_some(value)?,
+                expected,
+            )
         }
     };
     let value = value.parse::<f64>().map_or(value.to_string(), num);
+    let digits = written.trim_start_matches(['-', '+']).to_ascii_lowercase();
+    let base = [("0x", "hexadecimal"), ("0o", "octal"), ("0b", "binary")]
+        .into_iter()
+        .find(|(prefix, _)| digits.starts_with(prefix));
+    if let Some((_, base)) = base {
+        return Some(format!(
+            "{field}: {base} numbers are not accepted, write {value} (got {written})"
+        ));
+    }
+    if !written.starts_with(['!', '"', '\'']) {
+        let what = match expected {
+            "u64" => "a whole number, 0 or more",
+            "i64" => "a whole number",
+            _ => "a number",
+        };
+        return Some(format!("{field}: must be {what}, got {written}"));
+    }
     // `timeline.fps` → `fps: 24`; a list element (`center[1]`) → `0`.
     let plain = match field.ends_with(']') {
         true => value.clone(),

@@ -221,7 +221,7 @@ pub(crate) fn parse_drawable(
             ),
         });
     }
-    let raw: raw::Sequence = serde_yaml::from_str(text).map_err(|e| yaml_error(file, &e))?;
+    let raw: raw::Sequence = serde_yaml::from_str(text).map_err(|e| yaml_error(file, text, &e))?;
     let name = match is_stdin(file) {
         true => "stdin".into(),
         false => file

@@ -392,7 +392,7 @@ fn check_every_frame(t: &Timeline, shutter: Option<Shutter>) -> Check<()> {
     // sample (every frame up to the limit, then evenly spaced) still finds any bad stretch.
     const FULL_CHECK: u64 = 1_000_000;
     let step = t.frame_count.div_ceil(FULL_CHECK).max(1);
-    let mut previous_right: Option<DVec3> = None;
+    let mut previous: Option<(f64, Camera)> = None;
     for n in (t.first_frame()..=t.last_frame()).step_by(step as usize) {
         let frame_time = t.time_of(n);
         let times = match shutter {
@@ -405,21 +405,73 @@ fn check_every_frame(t: &Timeline, shutter: Option<Shutter>) -> Check<()> {
         };
         for time in times {
             let pose = t.camera_at(time);
-            // A view that swings through or close by `up` between two frames flips the picture
-            // over even though no sampled frame is degenerate: the right vector whips round.
-            let camera = Camera::new(&pose).and_then(|c| match previous_right {
-                Some(r) if r.dot(c.right) < libm::cos(MAX_ROLL_PER_FRAME_DEGREES.to_radians()) => {
-                    Err(Degenerate::Flip)
-                }
+            let camera = Camera::new(&pose).and_then(|c| match previous {
+                Some(before) if rolls_over(t, before, (time, c)) => Err(Degenerate::Flip),
                 _ => Ok(c),
             });
             match camera {
-                Ok(c) => previous_right = Some(c.right),
+                Ok(c) => previous = Some((time, c)),
                 Err(e) => return frame_problem(t, n, time, &pose, e),
             }
         }
     }
     Ok(())
+}
+
+/// Halvings of the time between two checked cameras at most, and the turn of the right vector
+/// below which a piece is not halved again (its roll is then measured directly). A piece's
+/// roll is measured well however small it is (a pass by up turns the right vector half round
+/// while the view barely moves); halving only keeps a fast pan's pieces short enough that
+/// carrying the right vector along the view's shortest turn follows the pan. Six halvings
+/// resolve a pan of 320° a frame in 5° pieces and cost at most 127 cameras for a frame.
+const ROLL_HALVINGS: u32 = 6;
+const SMOOTH_TURN_DEGREES: f64 = 5.0;
+
+/// Whether the camera rolls over between `a` and `b` (two checked cameras, each with its time):
+/// its picture turns about the view axis by more than `MAX_ROLL_PER_FRAME_DEGREES`, as when
+/// the view swings through or close by `up`. A right vector that turns that far may also be
+/// a fast pan (a whip pan, or `fps: 0.5`), which is legitimate and renders; so only the roll is
+/// counted: the turn of the right vector beyond the one that carrying it along the view's own
+/// turn makes, summed over pieces of the interval small enough to turn smoothly.
+fn rolls_over(t: &Timeline, a: (f64, Camera), b: (f64, Camera)) -> bool {
+    let limit = MAX_ROLL_PER_FRAME_DEGREES.to_radians();
+    a.1.right.dot(b.1.right) < libm::cos(limit) && roll(t, a, b, 0).abs() > limit
+}
+
+/// The signed roll, in radians about the view axis, from camera `a` to camera `b`.
+fn roll(t: &Timeline, (ta, a): (f64, Camera), (tb, b): (f64, Camera), depth: u32) -> f64 {
+    let mid = ta + 0.5 * (tb - ta);
+    let smooth = a.right.dot(b.right) >= libm::cos(SMOOTH_TURN_DEGREES.to_radians());
+    if smooth || depth == ROLL_HALVINGS || mid <= ta || mid >= tb {
+        return piece_roll(&a, &b);
+    }
+    match Camera::new(&t.camera_at(mid)) {
+        Ok(m) => roll(t, (ta, a), (mid, m), depth + 1) + roll(t, (mid, m), (tb, b), depth + 1),
+        // The view passes through up itself.
+        Err(_) => std::f64::consts::PI,
+    }
+}
+
+/// The angle from `a`'s right vector, carried along the shortest turn of the view from `a`'s
+/// forward to `b`'s (Rodrigues' rotation), to `b`'s right vector, about `b`'s forward.
+fn piece_roll(a: &Camera, b: &Camera) -> f64 {
+    let axis = a.forward.cross(b.forward);
+    let (sin, cos) = (axis.length(), a.forward.dot(b.forward));
+    if sin == 0.0 {
+        return match cos > 0.0 {
+            true => signed_angle(a.right, b.right, b.forward),
+            false => std::f64::consts::PI,
+        };
+    }
+    let k = axis / sin;
+    let r = a.right;
+    let carried = r * cos + k.cross(r) * sin + k * k.dot(r) * (1.0 - cos);
+    signed_angle(carried, b.right, b.forward)
+}
+
+/// The angle from `u` to `v` about `axis`, in (−π, π].
+fn signed_angle(u: DVec3, v: DVec3, axis: DVec3) -> f64 {
+    libm::atan2(u.cross(v).dot(axis), u.dot(v))
 }
 
 /// The message for frame `n`, whose camera at `time` (its own time, or one while the shutter
@@ -428,10 +480,12 @@ fn frame_problem(t: &Timeline, n: u64, time: f64, pose: &Pose, e: Degenerate) ->
     let (path, between) = match &t.path {
         TimelinePath::Orbit(_) => ("timeline.orbit".to_string(), String::new()),
         TimelinePath::Keys(keyed) => {
+            // A time at or past the last key is in the last interval (keys n−2 and n−1).
             let k = keyed
                 .passes
                 .partition_point(|&p| p <= time)
-                .saturating_sub(1);
+                .saturating_sub(1)
+                .min(keyed.keys.len().saturating_sub(2));
             let next = (k + 1).min(keyed.keys.len() - 1);
             (
                 format!("timeline.keyframes[{k}]"),

@@ -196,7 +196,7 @@ fn render_frame(
     // near the camera keep their precision however far from the origin the scene lies. A
     // frame f32 cannot resolve is traced in f64 (see `precision`).
     let f32_frame = settings.precision == Precision::F32
-        && precision::f32_limit(&world.scene, &exposure.camera, settings).is_none();
+        && precision::f32_limit(&world.scene, exposure, settings).is_none();
     let settings = &Settings {
         precision: if f32_frame {
             Precision::F32
