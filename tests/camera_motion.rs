@@ -453,6 +453,13 @@ fn whip_pans_render_and_only_true_roll_overs_are_refused() {
             &["render", name, "-q", "-o", &format!("{name}_####.png")],
         );
         assert!(out.status.success(), "{name}: {}", stderr(&out));
+        // preview flags what the loader refuses, and no more.
+        let out = run_in(
+            &tmp,
+            &["preview", name, "--out", &format!("{name}_preview")],
+        );
+        assert!(out.status.success(), "{name}: {}", stderr(&out));
+        assert!(!stderr(&out).contains("rolls"), "{name}: {}", stderr(&out));
     }
     // Over the top: from just before up to just past it, in one frame.
     std::fs::write(

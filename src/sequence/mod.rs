@@ -26,7 +26,7 @@ pub use guard::nesting_depth;
 pub(crate) use messages::{approx, num};
 pub use settings::{DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD};
 pub(crate) use settings::{Explicit, MAX_SAMPLES, exposure, output_pattern, preset};
-pub(crate) use timeline::MAX_FIRST_FRAME;
+pub(crate) use timeline::{MAX_FIRST_FRAME, rolls_over};
 
 use crate::camera::{Camera, Degenerate, Pose};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape};

@@ -433,7 +433,7 @@ const SMOOTH_TURN_DEGREES: f64 = 5.0;
 /// a fast pan (a whip pan, or `fps: 0.5`), which is legitimate and renders; so only the roll is
 /// counted: the turn of the right vector beyond the one that carrying it along the view's own
 /// turn makes, summed over pieces of the interval small enough to turn smoothly.
-fn rolls_over(t: &Timeline, a: (f64, Camera), b: (f64, Camera)) -> bool {
+pub(crate) fn rolls_over(t: &Timeline, a: (f64, Camera), b: (f64, Camera)) -> bool {
     let limit = MAX_ROLL_PER_FRAME_DEGREES.to_radians();
     a.1.right.dot(b.1.right) < libm::cos(limit) && roll(t, a, b, 0).abs() > limit
 }

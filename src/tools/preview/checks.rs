@@ -15,25 +15,26 @@ pub(super) fn problems(seq: &Sequence, samples: &[(u64, Pose)]) -> (Vec<bool>, V
     for (what, flags) in inside_objects(seq, &positions) {
         report(&flags, &frames, &what, &mut bad, &mut warnings);
     }
-    let rolls = roll_flags(samples);
-    let what = "the camera cannot be built or rolls over by more than 60° from the previous frame";
+    let rolls = roll_flags(&seq.timeline, samples);
+    let what =
+        "the camera cannot be built or its picture rolls by more than 60° since the previous frame";
     report(&rolls, &frames, what, &mut bad, &mut warnings);
     (bad, warnings)
 }
 
-/// The load-time roll check (`sequence::check_every_frame`) repeated on the samples, so a
-/// sequence built in code is flagged too.
-pub(super) fn roll_flags(samples: &[(u64, Pose)]) -> Vec<bool> {
-    let limit = crate::sequence::MAX_ROLL_PER_FRAME_DEGREES
-        .to_radians()
-        .cos();
-    let mut previous: Option<DVec3> = None;
+/// The load-time roll check (`sequence::check_every_frame`: a roll of the picture about the
+/// view axis, not a fast pan) repeated on the samples, so a sequence built in code is flagged
+/// too.
+pub(super) fn roll_flags(t: &Timeline, samples: &[(u64, Pose)]) -> Vec<bool> {
+    let mut previous: Option<(f64, Camera)> = None;
     let mut flags = Vec::with_capacity(samples.len());
-    for (_, pose) in samples {
-        let flag = match Camera::new(pose) {
+    for &(n, pose) in samples {
+        let flag = match Camera::new(&pose) {
             Ok(c) => {
-                let rolled = previous.is_some_and(|r| r.dot(c.right) < limit);
-                previous = Some(c.right);
+                let now = (t.time_of(n), c);
+                let rolled =
+                    previous.is_some_and(|before| crate::sequence::rolls_over(t, before, now));
+                previous = Some(now);
                 rolled
             }
             Err(_) => true,
