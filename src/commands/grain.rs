@@ -106,11 +106,11 @@ fn lens_pixels(c: &Camera, width: u32, scene: &Scene) -> f64 {
         return 0.0;
     }
     let f = c.focus_distance;
-    let pixels = |d: f64| {
-        let on_focal_plane = 2.0 * c.lens_radius * (d - f).abs() / d;
-        on_focal_plane / (f * c.tan_half_fov) * 0.5 * f64::from(width)
-    };
-    let horizon = 2.0 * c.lens_radius / (f * c.tan_half_fov) * 0.5 * f64::from(width);
+    // Pixels per scene unit on the focal plane, times the aperture.
+    let aperture_pixels = 2.0 * c.lens_radius / (f * c.tan_half_fov) * 0.5 * f64::from(width);
+    let pixels = |d: f64| aperture_pixels * (d - f).abs() / d;
+    // The limit of `pixels` as d grows without bound.
+    let horizon = aperture_pixels;
     scene
         .objects
         .iter()
