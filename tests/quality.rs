@@ -258,7 +258,7 @@ fn measure_writes_csv_json_and_a_plot() {
     );
     assert_eq!(
         lines.len(),
-        1 + measure::ladder(&orbit((32, 18)).settings).len() + 2
+        1 + measure::ladder(&orbit((32, 18)).settings, true).len() + 2
     );
     for line in &lines[1..] {
         let cells: Vec<&str> = line.split(',').collect();
@@ -449,7 +449,17 @@ fn check_warns_about_grain_where_the_film_blurs_with_few_samples() {
         assert!(out.status.success(), "{}", stderr(&out));
         stderr(&out)
     };
-    let flyby = check(&repo().join("sequences/flyby.yaml"));
+    let tmp = scratch("grain");
+    let text = std::fs::read_to_string(repo().join("sequences/flyby.yaml")).unwrap();
+    // The sampling that was the default before film got its own: 2 to 8 samples.
+    let grainy = text.replacen(
+        "render:\n",
+        "render:\n  samples: 2\n  adaptive: { max_samples: 8 }\n",
+        1,
+    );
+    assert_ne!(grainy, text);
+    std::fs::write(tmp.join("grainy.yaml"), grainy).unwrap();
+    let flyby = check(&tmp.join("grainy.yaml"));
     assert!(
         flyby.contains("frames 0 to 144 may look grainy")
             && flyby.contains("the shutter smears up to")
@@ -459,12 +469,66 @@ fn check_warns_about_grain_where_the_film_blurs_with_few_samples() {
     );
     let talk = check(&repo().join("sequences/talk.yaml"));
     assert!(!talk.contains("grainy"), "{talk}");
-    // Enough samples for a smooth blur: no warning.
-    let tmp = scratch("grain");
-    let text = std::fs::read_to_string(repo().join("sequences/flyby.yaml")).unwrap();
-    let smooth = text.replacen("render:\n", "render:\n  adaptive: { max_samples: 64 }\n", 1);
-    assert_ne!(smooth, text);
-    std::fs::write(tmp.join("smooth.yaml"), smooth).unwrap();
-    let out = check(&tmp.join("smooth.yaml"));
+    // Film's default sampling reaches 64 samples where the grain is: no warning.
+    let out = check(&repo().join("sequences/flyby.yaml"));
     assert!(!out.contains("grainy"), "{out}");
+}
+
+/// Frame 60 of flyby.yaml (a 180° shutter and an open lens) at `w`×`h`.
+fn flyby((w, h): (u64, u64)) -> Sequence {
+    let file = repo().join("sequences/flyby.yaml");
+    let size = format!("{w}x{h}");
+    let line = ["rayreel", "render", file.to_str().unwrap(), "--size", &size];
+    match Cli::try_parse_from(line).unwrap().command {
+        Command::Render(r) => Job::new(&r.job).unwrap().seq,
+        _ => unreachable!(),
+    }
+}
+
+#[test]
+fn film_samples_converge_faster_than_random_and_rounds_spend_where_the_grain_is() {
+    let seq = flyby((160, 90));
+    let base = seq.settings;
+    let all: Vec<usize> = (0..(160 * 90) as usize).collect();
+    let render = |s: Settings| measure::render(&seq, 60, &s).unwrap();
+    let uniform = |n: u32, sampler| Settings {
+        samples: n,
+        adaptive: None,
+        sampler,
+        ..base
+    };
+    let truth = render(uniform(1024, Sampler::Stratified)).rgb;
+    let error = |n, sampler| rmse(&render(uniform(n, sampler)).rgb, &truth, &all);
+    // Sobol' points: at least the Monte Carlo rate, and well ahead of independent samples.
+    let counts = [4.0, 16.0, 64.0];
+    let sobol: Vec<f64> = [4, 16, 64].map(|n| error(n, Sampler::Stratified)).to_vec();
+    let random: Vec<f64> = [4, 16, 64].map(|n| error(n, Sampler::Random)).to_vec();
+    let (rate, random_rate) = (slope(&counts, &sobol), slope(&counts, &random));
+    eprintln!("sobol {sobol:?} slope {rate:.2}; random {random:?} slope {random_rate:.2}");
+    assert!(rate < -0.5, "Sobol' error slope {rate}");
+    assert!(
+        (0..3).all(|i| sobol[i] < random[i]),
+        "{sobol:?} vs {random:?}"
+    );
+    // The file sets no sampling: film's default, in rounds.
+    assert_eq!(
+        (base.samples, base.adaptive.map(|a| a.max_samples)),
+        (sequence::FILM_SAMPLES, Some(sequence::FILM_SAMPLING_MAX))
+    );
+    let rounds = render(base);
+    let pixels = all.len() as u64;
+    let spent = rounds.samples as f64 / pixels as f64;
+    let e = rmse(&rounds.rgb, &truth, &all);
+    eprintln!("rounds: {spent:.2} samples a pixel, rmse {e:.5}");
+    // Flat pixels stop at 4, grainy ones go on: far under 64 everywhere, well over 4, and
+    // as clean as 16 uniform samples at fewer samples.
+    assert!(spent > 5.0 && spent < 16.0, "{spent} samples a pixel");
+    assert!(e < sobol[1], "rounds {e} vs 16 uniform {}", sobol[1]);
+    // The same bytes whatever the thread count (and so the order of work).
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let again = one.install(|| render(base));
+    assert_eq!(again.rgb, rounds.rgb);
 }

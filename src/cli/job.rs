@@ -127,8 +127,8 @@ impl Job {
 /// `render.max_depth`); the flags that set a value replace it.
 fn apply(seq: &mut Sequence, o: &JobArgs) -> Result<(), JobError> {
     if let Some(q) = o.quality {
-        let glass = seq.scene.has_glass();
-        seq.explicit.preset(&mut seq.settings, q, glass);
+        let (glass, film) = (seq.scene.has_glass(), seq.film());
+        seq.explicit.preset(&mut seq.settings, q, glass, film);
         // The preset's first pass may reach the file's own most samples: nothing is left
         // to extend.
         let s = &mut seq.settings;

@@ -328,10 +328,7 @@ fn noun(n: f64, what: &str) -> String {
 
 /// The `film:` line when frames are more than a pinhole's instant: a shutter, an open lens.
 fn film(seq: &Sequence) -> String {
-    let widest = match &seq.timeline.path {
-        TimelinePath::Orbit(o) => o.aperture,
-        TimelinePath::Keys(k) => k.keys.iter().map(|k| k.aperture).fold(0.0, f64::max),
-    };
+    let widest = seq.timeline.widest_aperture();
     let mut parts = Vec::new();
     if let Some(s) = seq.settings.shutter {
         parts.push(format!(

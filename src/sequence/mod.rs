@@ -24,7 +24,10 @@ use settings::*;
 
 pub use guard::nesting_depth;
 pub(crate) use messages::{approx, num};
-pub use settings::{DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD};
+pub use settings::{
+    DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD, FILM_FINAL_MAX,
+    FILM_FINAL_THRESHOLD, FILM_SAMPLES, FILM_SAMPLING_MAX, FILM_THRESHOLD,
+};
 pub(crate) use settings::{Explicit, MAX_SAMPLES, exposure, output_pattern, preset};
 pub(crate) use timeline::{MAX_FIRST_FRAME, rolls_over};
 
@@ -278,16 +281,22 @@ fn lost_output_pattern(file: &Path, text: &str, used: &str) -> Option<String> {
     })
 }
 
+impl Sequence {
+    /// Whether frames are film, not a pinhole's instant: a shutter on a camera that can move,
+    /// or a lens some key opens.
+    pub(crate) fn film(&self) -> bool {
+        film(&self.settings, &self.timeline)
+    }
+}
+
+fn film(s: &Settings, timeline: &Timeline) -> bool {
+    (s.shutter.is_some() && timeline.moves()) || timeline.widest_aperture() > 0.0
+}
+
 /// The sequence, and the first key or frame whose camera cannot be built (see `load_drawable`).
 fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Option<Invalid>)> {
     let (mut settings, explicit) = render_settings(&raw.render)?;
     let (scene, mut warnings) = scene_of(&raw, base)?;
-    // `render_settings` applied the preset; glass may need it to reach deeper.
-    if let Some(q) = raw.render.quality
-        && scene.has_glass()
-    {
-        explicit.preset(&mut settings, q, true);
-    }
     let camera = raw.camera.as_ref().map(camera_key).transpose()?;
     let loaded = match (&raw.timeline, camera) {
         (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
@@ -299,6 +308,9 @@ fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Opt
         (None, None) => return invalid("camera", "a sequence needs a `camera:` or a `timeline:`"),
     };
     let timeline = loaded.timeline;
+    // Glass needs a preset's depth, film its sampling.
+    let film = film(&settings, &timeline);
+    explicit.settle(&mut settings, raw.render.quality, scene.has_glass(), film);
     let seq = Sequence {
         name: name.to_string(),
         scene,

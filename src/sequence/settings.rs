@@ -16,13 +16,32 @@ pub struct Explicit {
 
 impl Explicit {
     /// `q`'s values for what the file left unset; on a scene with glass (`glass`), at least
-    /// 3 surfaces (in, out, and what is behind) so `draft` still shows through it.
-    pub(crate) fn preset(&self, s: &mut Settings, q: Quality, glass: bool) {
-        preset(s, q);
+    /// 3 surfaces (in, out, and what is behind) so `draft` still shows through it; on film
+    /// (`film`: a shutter or a lens), `final`'s film sampling.
+    pub(crate) fn preset(&self, s: &mut Settings, q: Quality, glass: bool, film: bool) {
+        preset(s, q, film);
         if glass {
             s.max_depth = s.max_depth.max(GLASS_DEPTH);
         }
         self.apply(s);
+    }
+
+    /// The sampling of a sequence: its preset's (`q`), or where it sets no sampling at all,
+    /// the default (film's when `film`), under what the file set itself. A preset's
+    /// adaptive sampling that the file's own samples already reach is dropped.
+    pub(crate) fn settle(&self, s: &mut Settings, q: Option<Quality>, glass: bool, film: bool) {
+        match q {
+            Some(q) => self.preset(s, q, glass, film),
+            None => {
+                if self.samples.is_none() && self.adaptive.is_none() {
+                    default_sampling(s, film);
+                }
+                self.apply(s);
+            }
+        }
+        if self.adaptive.is_none() && s.adaptive.is_some_and(|a| a.max_samples <= s.samples) {
+            s.adaptive = None;
+        }
     }
 
     /// The file's own values over `s`'s.
@@ -63,15 +82,11 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<(Settings, Explicit)> {
         precision: r.precision.unwrap_or_default(),
         aov: Aovs::of(r.aov.as_deref().unwrap_or_default()),
     };
-    if r.quality.is_none() && r.samples.is_none() && r.adaptive.is_none() {
-        default_sampling(&mut s);
-    }
     pixels(s.width, s.height).or_else(|m| invalid("render.width", m))?;
     let explicit = explicit(r)?;
-    match r.quality {
-        Some(q) => explicit.preset(&mut s, q, false),
-        None => explicit.apply(&mut s),
-    }
+    // Glass and film are known once the scene and the timeline are: `validate` settles
+    // the sampling again then.
+    explicit.settle(&mut s, r.quality, false, false);
     if let Some(a) = s.adaptive
         && a.max_samples <= s.samples
     {
@@ -146,12 +161,18 @@ pub(crate) fn exposure(v: f64) -> Result<f64, String> {
 }
 
 /// Sampling of a file that sets none (no `samples`, `adaptive` or `quality`): antialiased
-/// frames at about the cost one sample had before the packet tracer (see the README).
-fn default_sampling(s: &mut Settings) {
-    s.samples = DEFAULT_SAMPLES;
+/// frames at about the cost one sample had before the packet tracer (see the README); on
+/// film (a shutter or a lens), enough samples where the grain is, found in rounds
+/// (docs/quality.md#motion-blur-and-depth-of-field).
+fn default_sampling(s: &mut Settings, film: bool) {
+    let (samples, threshold, max_samples) = match film {
+        false => (DEFAULT_SAMPLES, DEFAULT_THRESHOLD, DEFAULT_SAMPLING_MAX),
+        true => (FILM_SAMPLES, FILM_THRESHOLD, FILM_SAMPLING_MAX),
+    };
+    s.samples = samples;
     s.adaptive = Some(Adaptive {
-        threshold: DEFAULT_THRESHOLD as f32,
-        max_samples: DEFAULT_SAMPLING_MAX,
+        threshold: threshold as f32,
+        max_samples,
     });
 }
 
@@ -159,6 +180,14 @@ fn default_sampling(s: &mut Settings) {
 pub const DEFAULT_SAMPLES: u32 = 2;
 /// `render.adaptive.max_samples` when a file sets no sampling.
 pub const DEFAULT_SAMPLING_MAX: u32 = 8;
+/// `render.samples`, `render.adaptive.threshold` and `max_samples` when a file with a
+/// shutter or a lens sets no sampling.
+pub const FILM_SAMPLES: u32 = 4;
+pub const FILM_THRESHOLD: f64 = 0.025;
+pub const FILM_SAMPLING_MAX: u32 = 64;
+/// `final`'s threshold and most samples on film.
+pub const FILM_FINAL_THRESHOLD: f64 = 0.015;
+pub const FILM_FINAL_MAX: u32 = 128;
 
 /// `render.shutter` and `render.shutter_offset`; None when the shutter angle is 0.
 fn shutter(r: &raw::Render) -> Check<Option<Shutter>> {
@@ -188,16 +217,25 @@ pub const DEFAULT_MAX_SAMPLES: u64 = 32;
 /// Largest samples per pixel accepted.
 pub(crate) const MAX_SAMPLES: u64 = 4096;
 
-/// What a quality preset sets; explicit settings at the same or a later level override it.
-pub(crate) fn preset(s: &mut Settings, q: Quality) {
-    let (samples, adaptive, depth) = match q {
-        Quality::Draft => (1, None, 2),
-        Quality::Preview => (4, None, 3),
-        Quality::Final => (
+/// What a quality preset sets (on film, `final` samples in rounds to a lower threshold);
+/// explicit settings at the same or a later level override it.
+pub(crate) fn preset(s: &mut Settings, q: Quality, film: bool) {
+    let (samples, adaptive, depth) = match (q, film) {
+        (Quality::Draft, _) => (1, None, 2),
+        (Quality::Preview, _) => (4, None, 3),
+        (Quality::Final, false) => (
             4,
             Some(Adaptive {
                 threshold: DEFAULT_THRESHOLD as f32,
                 max_samples: 64,
+            }),
+            5,
+        ),
+        (Quality::Final, true) => (
+            8,
+            Some(Adaptive {
+                threshold: FILM_FINAL_THRESHOLD as f32,
+                max_samples: FILM_FINAL_MAX,
             }),
             5,
         ),

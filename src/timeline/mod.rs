@@ -237,6 +237,22 @@ fn constant_passes(times: &[f64], reach: &[f64]) -> Vec<f64> {
 }
 
 impl Timeline {
+    /// Whether the camera can move: an orbit, or more than one key.
+    pub fn moves(&self) -> bool {
+        match &self.path {
+            Path::Orbit(_) => true,
+            Path::Keys(k) => k.keys.len() > 1,
+        }
+    }
+
+    /// The widest aperture any key (or the orbit) opens the lens to.
+    pub fn widest_aperture(&self) -> f64 {
+        match &self.path {
+            Path::Orbit(o) => o.aperture,
+            Path::Keys(k) => k.keys.iter().map(|k| k.aperture).fold(0.0, f64::max),
+        }
+    }
+
     /// A single frame of a still camera (its key's time is ignored).
     pub(crate) fn still(key: Key) -> Timeline {
         let key = Key { time: 0.0, ..key };

@@ -236,7 +236,7 @@ fn disk_basis(center: DVec3, radius: f64, p: DVec3) -> Option<(DVec3, DVec3)> {
 /// c + radius·((a·e1) + (b·e2)).
 #[inline(always)]
 fn disk_point(center: DVec3, radius: f64, (e1, e2): (DVec3, DVec3), x: f64, y: f64) -> DVec3 {
-    let (a, b) = super::rows::concentric(x, y);
+    let (a, b) = super::lens::concentric(x, y);
     DVec3::new(
         center.x + radius * (a * e1.x + b * e2.x),
         center.y + radius * (a * e1.y + b * e2.y),

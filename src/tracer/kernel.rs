@@ -112,7 +112,7 @@ impl Kernel {
         pass: &Pass,
         pixels: &[u32],
         old: Old,
-        out: &mut [[f32; 4]],
+        out: &mut [[f32; 5]],
     ) -> RowStats {
         self.stats(pass, Job::Marked(pass, pixels, old, out))
     }
@@ -163,7 +163,7 @@ impl Kernel {
 /// One call into the generic kernel code, so that each CPU feature needs one entry point.
 enum Job<'a, 'b> {
     Band(&'a Pass<'b>, u32, RowOut<'a>),
-    Marked(&'a Pass<'b>, &'a [u32], Old<'a>, &'a mut [[f32; 4]]),
+    Marked(&'a Pass<'b>, &'a [u32], Old<'a>, &'a mut [[f32; 5]]),
     Depth(&'a Pass<'b>, u32, &'a mut [f32]),
     Rays(&'a World, &'a [Ray], u32, &'a mut [DVec3]),
 }

@@ -6,12 +6,14 @@
 //! count, order of work or lane width.
 
 pub mod accel;
+mod adaptive;
 pub mod aov;
 mod area;
 pub(crate) mod bvh;
 pub mod glass;
 pub mod intersect;
 pub mod kernel;
+mod lens;
 mod mesh;
 pub mod path;
 mod polygon;
@@ -19,6 +21,7 @@ pub mod precision;
 mod rows;
 pub mod sample;
 pub mod shade;
+pub mod sobol;
 pub mod texture;
 mod triangle;
 
@@ -227,13 +230,15 @@ fn render_frame(
     ];
     let camera = &exposure.camera;
     let from_origin = world.geometry.from_origin(camera.origin);
+    let sampled = exposure.sampled();
     let first = Pass {
         world,
         camera,
-        exposure: exposure.sampled().then_some(exposure),
+        exposure: sampled.then_some(exposure),
         settings,
         frame,
         samples: Samples::All(settings.samples),
+        rounds: sampled && settings.adaptive.is_some() && settings.samples > 1,
         from_origin: &from_origin,
         stop,
     };
@@ -242,7 +247,9 @@ fn render_frame(
         alpha: alpha.as_deref_mut(),
     };
     let mut stats = run_pass(kernel, &first, &mut planes, &mut spread);
-    if let Some(a) = settings.adaptive {
+    if let (Some(a), true) = (settings.adaptive, first.rounds) {
+        stats = stats + adaptive::rounds(kernel, &first, a, &mut planes, &mut spread);
+    } else if let Some(a) = settings.adaptive {
         let marked = mark(planes.rgb, &spread, w, h, a.threshold);
         let more = Pass {
             samples: Samples::More {
@@ -251,7 +258,10 @@ fn render_frame(
             },
             ..first
         };
-        stats = stats + extend(kernel, &more, &marked, &mut planes);
+        let marked: Vec<u32> = (0..marked.len() as u32)
+            .filter(|&i| marked[i as usize])
+            .collect();
+        stats = stats + extend(kernel, &more, &marked, &mut planes).0;
     }
     if settings.exposure != 0.0 {
         expose(&mut rgb, settings.exposure);
@@ -324,13 +334,16 @@ fn in_bands(buffer: Option<&mut [f32]>, band: usize, bands: usize) -> Vec<Option
     }
 }
 
-/// Adds samples to the marked pixels, packed in raster order across rows so packets stay
-/// full however sparse the marks are.
-fn extend(kernel: Kernel, pass: &Pass, marked: &[bool], planes: &mut Planes) -> RowStats {
-    let pixels: Vec<u32> = (0..marked.len() as u32)
-        .filter(|&i| marked[i as usize])
-        .collect();
-    let mut means = vec![[0f32; 4]; pixels.len()];
+/// Adds samples to the pixels `pixels` (row-major indices, ascending), packed in raster
+/// order across rows so packets stay full however sparse they are; returns what the pass
+/// recorded of each (its samples' variance in rounds, else 0).
+fn extend(
+    kernel: Kernel,
+    pass: &Pass,
+    pixels: &[u32],
+    planes: &mut Planes,
+) -> (RowStats, Vec<f32>) {
+    let mut means = vec![[0f32; 5]; pixels.len()];
     let (rgb, alpha) = (&*planes.rgb, planes.alpha.as_deref());
     // Tasks of 256 pixels: a whole number of packets of every width.
     let stats = means
@@ -344,7 +357,7 @@ fn extend(kernel: Kernel, pass: &Pass, marked: &[bool], planes: &mut Planes) -> 
             alpha[p as usize] = m[3];
         }
     }
-    stats
+    (stats, means.iter().map(|m| m[4]).collect())
 }
 
 /// 2^stops (libm's exp2, rounded to f32) times every channel, in f32; a product beyond f32

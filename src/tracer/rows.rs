@@ -8,7 +8,9 @@ use super::accel::{FromOrigin, Rays};
 use super::intersect::Ray;
 use super::path::{self, Eye, LightSeeds};
 use super::sample::{self, Dims, Pattern, Seed};
+use super::sobol;
 use super::{Sampler, Samples, Settings, World, finite};
+use super::{adaptive, lens};
 use crate::camera::{Camera, screen_points};
 use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
 use crate::shutter::{Exposure, INSTANTS};
@@ -27,6 +29,9 @@ pub(super) struct Pass<'a> {
     pub settings: &'a Settings,
     pub frame: u64,
     pub samples: Samples,
+    /// Adaptive sampling in rounds (`adaptive`): what a pass records of each pixel is its
+    /// samples' variance, not their spread.
+    pub rounds: bool,
     /// `Geometry::from_origin` of the camera position.
     pub from_origin: &'a [FromOrigin],
     /// Set when the frame is no longer wanted: packets and samples not yet begun are skipped.
@@ -163,14 +168,14 @@ pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
 }
 
 /// A pass that adds samples to the pixels `marked` (row-major indices) of a frame whose
-/// current means are `rgb` (and coverage `alpha`); writes their new means, coverage fourth,
-/// to `out`, one per marked pixel.
+/// current means are `rgb` (and coverage `alpha`); writes their new means, coverage fourth
+/// and (in rounds) this pass's sample variance fifth, to `out`, one per marked pixel.
 #[inline(always)]
 pub(super) fn marked<V: Lanes>(
     pass: &Pass,
     marked: &[u32],
     (rgb, alpha): Old,
-    out: &mut [[f32; 4]],
+    out: &mut [[f32; 5]],
 ) -> RowStats {
     let w = pass.settings.width;
     let mut stats = RowStats::default();
@@ -184,10 +189,10 @@ pub(super) fn marked<V: Lanes>(
             let a = alpha.map_or(0.0, |a| a[p]);
             [rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2], a]
         });
-        let means = packet::<V>(pass, &packet_pixels, Some(&old), false, &mut stats);
+        let means = packet::<V>(pass, &packet_pixels, Some(&old), pass.rounds, &mut stats);
         for (k, o) in out.iter_mut().enumerate() {
             let c = means.rgb[k];
-            *o = [c[0], c[1], c[2], means.alpha[k]];
+            *o = [c[0], c[1], c[2], means.alpha[k], means.spread[k]];
         }
     }
     stats
@@ -209,6 +214,8 @@ fn packet<V: Lanes>(
     let pattern = match (pass.samples, s.sampler) {
         // The talk's image: one ray through the pixel centre, whatever the sampler.
         (Samples::All(1), _) => Pattern::Centre,
+        // Blur and focus: the pixel, the lens and the shutter sampled together.
+        (_, Sampler::Stratified) if pass.exposure.is_some() => Pattern::Sobol,
         (Samples::More { .. }, _) => Pattern::R2,
         (Samples::All(n), Sampler::Stratified) => Pattern::stratified(n),
         (Samples::All(_), Sampler::Random) => Pattern::Independent,
@@ -216,15 +223,29 @@ fn packet<V: Lanes>(
     let pixel = |k: usize| u64::from(px.rows[k]) * u64::from(s.width) + u64::from(px.cols[k]);
     let centre = Seed::new(Pattern::Centre, 0, 0);
     let seeds = match pattern {
-        // The centre needs no seed.
-        Pattern::Centre => [centre; MAX_LANES],
+        // The centre needs no seed, Sobol' points their own.
+        Pattern::Centre | Pattern::Sobol => [centre; MAX_LANES],
         _ => per_lane(V::N, centre, |k| Seed::new(pattern, pass.frame, pixel(k))),
     };
+    let lead = px.valid.trailing_zeros() as usize;
+    let sobol = (pattern == Pattern::Sobol).then(|| {
+        sobol::Packet::<MAX_LANES>::new(V::N, |k| {
+            let k = if px.valid >> k & 1 == 1 { k } else { lead };
+            sample::state(pass.frame, pixel(k))
+        })
+    });
     let (first, end) = match pass.samples {
         Samples::All(n) => (0, n),
         Samples::More { have, total } => (have, total),
     };
     let range = spread && end - first > 1;
+    let halves = spread && pass.rounds;
+    // In rounds, a first pass also sums its two halves apart (see `adaptive`).
+    let half = match pass.samples {
+        Samples::All(n) if halves => first + n / 2,
+        _ => first,
+    };
+    let (mut early, mut late) = (V3::<V>::zero(), V3::<V>::zero());
     let row = V::from_fn(|k| f64::from(px.rows[k]));
     let col = V::from_fn(|k| f64::from(px.cols[k]));
     let mut sum = V3::<V>::zero();
@@ -243,17 +264,39 @@ fn packet<V: Lanes>(
         .world
         .area_lights
         .then(|| per_lane(V::N, 0, |k| sample::light_seed(pass.frame, pixel(k))));
-    let dims = pass.exposure.map(|_| {
-        per_lane(V::N, Dims::new(pattern, 0, 0), |k| {
+    let dims = match (pass.exposure, pattern) {
+        (Some(_), Pattern::Sobol) | (None, _) => None,
+        (Some(_), _) => Some(per_lane(V::N, Dims::new(pattern, 0, 0), |k| {
             Dims::new(pattern, pass.frame, pixel(k))
-        })
-    });
+        })),
+    };
     for k in (first..end).take_while(|_| !pass.stopped()) {
-        let (u, v) = offsets::<V>(pattern, &seeds, k);
+        // Per lane: u, v, then the lens's a, b, then the time.
+        let mut x = [[0.0; MAX_LANES]; 5];
+        let (u, v) = match &sobol {
+            Some(sobol) => {
+                sobol.at(k, &mut x);
+                (V::load(&x[0]), V::load(&x[1]))
+            }
+            None => offsets::<V>(pattern, &seeds, k),
+        };
+        if let Some(dims) = &dims {
+            for lane in 0..V::N {
+                [x[4][lane], x[2][lane], x[3][lane]] = dims[lane].at(pattern, k);
+            }
+        }
+        let (a, b, times) = (&x[2], &x[3], &x[4]);
         let lights = light_seeds.as_ref().map(|seeds| LightSeeds { seeds, k });
-        let eye = match (pass.exposure, &dims) {
-            (Some(exposure), Some(dims)) => Eye {
-                rays: sampled_rays(pass, exposure, row, col, u, v, (pattern, dims, k)),
+        let eye = match pass.exposure {
+            Some(exposure) => Eye {
+                rays: sampled_rays(
+                    pass,
+                    exposure,
+                    (row, col),
+                    (u, v),
+                    times,
+                    (V::load(a), V::load(b)),
+                ),
                 active: V::M::from_bits(px.valid),
                 from_origin: None,
                 transparent: s.alpha,
@@ -278,7 +321,11 @@ fn packet<V: Lanes>(
         if s.alpha {
             cover = cover + V::select(covered, one, zero);
         }
-        if range {
+        if halves && k < half {
+            early = early + c;
+        } else if halves {
+            late = late + c;
+        } else if range {
             lo = V3 {
                 x: lo.x.min(c.x),
                 y: lo.y.min(c.y),
@@ -296,7 +343,7 @@ fn packet<V: Lanes>(
         spread: [0.0; MAX_LANES],
         alpha: [0.0; MAX_LANES],
     };
-    if range {
+    if range && !halves {
         let d = hi - lo;
         d.x.max(d.y).max(d.z).store_f32(&mut means.spread);
     }
@@ -309,6 +356,14 @@ fn packet<V: Lanes>(
         ),
         None => (None, None),
     };
+    if halves {
+        let n = |c: u32| V::splat(f64::from(c));
+        let (a, b) = match old_rgb {
+            Some(old) => (old, late / n(end - first)),
+            None => (early / n(half - first), late / n(end - half)),
+        };
+        adaptive::disagreement(a, b, zero, one).store_f32(&mut means.spread);
+    }
     let mean = mean_of::<V, _>(pass.samples, sum, old_rgb);
     finish(mean, px, &mut means.rgb, stats);
     if s.alpha {
@@ -412,31 +467,24 @@ fn eye_directions<V: Lanes>(pass: &Pass, row: V, col: V, u: V, v: V) -> V3<V> {
     pass.camera.directions(x, y)
 }
 
-/// Eye rays of sample `k` (of `pattern`, for pixels with `dims`) from each lane's own camera:
-/// the one at its sample's instant while the shutter is open, else the frame's; through a
-/// point of its lens when the aperture is open there. A lane whose camera is a pinhole gets
-/// exactly the ray `eye_directions` gives.
+/// Eye rays from each lane's own camera: the one at its sample's instant (time coordinate
+/// `times`) while the shutter is open, else the frame's; through the point (a, b) of its
+/// lens when the aperture is open there. A lane whose camera is a pinhole gets exactly the
+/// ray `eye_directions` gives.
 #[inline(always)]
 fn sampled_rays<V: Lanes>(
     pass: &Pass,
     exposure: &Exposure,
-    row: V,
-    col: V,
-    u: V,
-    v: V,
-    (pattern, dims, k): (Pattern, &[Dims; MAX_LANES], u32),
+    (row, col): (V, V),
+    (u, v): (V, V),
+    times: &[f64; MAX_LANES],
+    (a, b): (V, V),
 ) -> Rays<V> {
     let mut cameras = [&exposure.camera; MAX_LANES];
-    let mut disc = [(0.0, 0.0); MAX_LANES];
-    for lane in 0..V::N {
-        let [t, a, b] = dims[lane].at(pattern, k);
-        if !exposure.instants.is_empty() {
-            let j = ((t * INSTANTS as f64) as usize).min(INSTANTS - 1);
+    if !exposure.instants.is_empty() {
+        for lane in 0..V::N {
+            let j = ((times[lane] * INSTANTS as f64) as usize).min(INSTANTS - 1);
             cameras[lane] = &exposure.instants[j];
-        }
-        // sin and cos cost more than the rest of the ray: only for a lens that is open.
-        if cameras[lane].lens_radius > 0.0 {
-            disc[lane] = concentric(a, b);
         }
     }
     let s = pass.settings;
@@ -460,7 +508,7 @@ fn sampled_rays<V: Lanes>(
         };
     }
     let focus = V::from_fn(|i| cameras[i].focus_distance);
-    let (dx, dy) = (V::from_fn(|i| disc[i].0), V::from_fn(|i| disc[i].1));
+    let (dx, dy) = lens::disc(a, b);
     let lens = origin + right * (radius * dx) + up * (radius * dy);
     let target = origin + w * focus;
     Rays {
@@ -468,23 +516,6 @@ fn sampled_rays<V: Lanes>(
         dir: V3::select(open, (target - lens).normalize(), pinhole),
         leaving: V::splat(-1.0),
     }
-}
-
-/// Shirley and Chiu's concentric map of [0, 1)² onto the unit disc: squares around the centre
-/// become rings, so stratified points stay stratified and evenly spread.
-#[inline]
-pub fn concentric(a: f64, b: f64) -> (f64, f64) {
-    let (a, b) = (2.0 * a - 1.0, 2.0 * b - 1.0);
-    if a == 0.0 && b == 0.0 {
-        return (0.0, 0.0);
-    }
-    let quarter = std::f64::consts::FRAC_PI_4;
-    let (r, phi) = if a.abs() > b.abs() {
-        (a, quarter * (b / a))
-    } else {
-        (b, 2.0 * quarter - quarter * (a / b))
-    };
-    (r * libm::cos(phi), r * libm::sin(phi))
 }
 
 /// Background `Z`: far beyond any scene a compositor meets, yet finite, so arithmetic on the

@@ -3,11 +3,11 @@
 //! sequence with a per-pixel random shift. Every random number is a hash of (frame, pixel,
 //! sample), so any pixel of any frame is reproducible alone, on any thread or machine.
 //!
-//! With motion blur or depth of field each sample also has a time and a point on the lens
-//! (`Dims`), drawn beside its position in the pixel, which stays exactly what it is without
-//! them. On a grid the N time strata and the n×n lens cells are each used once and paired
-//! with the pixel cells through per-pixel pseudo-random permutations (a Latin hypercube over
-//! the three); R2 samples continue with the R3 sequence in time and on the lens.
+//! With motion blur or depth of field, stratified samples are Owen-scrambled Sobol' points
+//! that place the pixel position, the lens point and the instant together (`sobol`); a lone
+//! sample keeps the pixel centre and independent samples stay independent, each with a time
+//! and a lens point drawn beside them (`Dims`; R2 samples of `sampler: random` continue
+//! with the R3 sequence).
 
 /// How a pass places a pixel's samples.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -20,6 +20,9 @@ pub enum Pattern {
     R2,
     /// Independent uniform positions.
     Independent,
+    /// Owen-scrambled Sobol' points in the pixel, on the lens and in time at once (frames
+    /// with motion blur or depth of field; see `sobol`).
+    Sobol,
 }
 
 impl Pattern {
@@ -55,7 +58,7 @@ impl Seed {
             Pattern::Independent => frame ^ 0x5bd1_e995,
             _ => frame,
         };
-        let state = mix(mix(0x9e37_79b9_7f4a_7c15 ^ frame) ^ pixel);
+        let state = state(frame, pixel);
         let shift = match pattern {
             Pattern::R2 => random2(state, u32::MAX),
             _ => (0.0, 0.0),
@@ -85,8 +88,16 @@ impl Seed {
                 )
             }
             Pattern::Independent => random2(self.state, k),
+            Pattern::Sobol => unreachable!("Sobol' points come from `Sobol::at`"),
         }
     }
+}
+
+/// A pixel's hash state, mix(mix(0x9e37_79b9_7f4a_7c15 ⊕ frame) ⊕ pixel): what its
+/// samples' random numbers are drawn from.
+#[inline]
+pub fn state(frame: u64, pixel: u64) -> u64 {
+    mix(mix(0x9e37_79b9_7f4a_7c15 ^ frame) ^ pixel)
 }
 
 /// Sub-pixel offsets in [0, 1)² of sample `k` of `count` for pixel `pixel` of frame `frame`.
@@ -127,21 +138,10 @@ impl Dims {
         Dims { state, shift }
     }
 
-    /// Sample `k`'s time and lens coordinates, [t, a, b] ∈ [0, 1)³ (a grid's may round up to 1).
+    /// Sample `k`'s time and lens coordinates, [t, a, b] ∈ [0, 1)³.
     #[inline]
     pub fn at(&self, pattern: Pattern, k: u32) -> [f64; 3] {
         match pattern {
-            Pattern::Grid(n) => {
-                let count = n * n;
-                let [jt, ja, jb] = random3(mix(self.state ^ u64::from(k)));
-                let stratum = permute(k, count, (self.state >> 32) as u32);
-                let cell = permute(k, count, self.state as u32);
-                [
-                    (f64::from(stratum) + jt) / f64::from(count),
-                    (f64::from(cell % n) + ja) / f64::from(n),
-                    (f64::from(cell / n) + jb) / f64::from(n),
-                ]
-            }
             Pattern::R2 => {
                 // The R3 sequence (Roberts 2018): 1/φ₃^d, φ₃ the real root of x⁴ = x + 1.
                 const B: [f64; 3] = [
@@ -152,7 +152,8 @@ impl Dims {
                 let i = f64::from(k) + 1.0;
                 [0, 1, 2].map(|d| (self.shift[d] + i * B[d]).fract())
             }
-            Pattern::Centre | Pattern::Independent => random3(mix(self.state ^ u64::from(k))),
+            // A lone sample, independent samples (a grid's are Sobol' points on film).
+            _ => random3(mix(self.state ^ u64::from(k))),
         }
     }
 }
@@ -200,42 +201,6 @@ pub fn unit32(b: u32) -> f64 {
     f64::from(b) * (1.0 / 4_294_967_296.0)
 }
 
-/// Element `i` of a pseudo-random permutation of 0..l chosen by `p`: Kensler's hash
-/// ("Correlated Multi-Jittered Sampling", Pixar 2013, as pbrt-v4's `PermutationElement`), a
-/// bijection on the smallest power of two ≥ l walked until it lands below l; the final
-/// (i + p) mod l is taken without the 32-bit wrap-around, which would break the bijection.
-fn permute(mut i: u32, l: u32, p: u32) -> u32 {
-    let mut w = l - 1;
-    w |= w >> 1;
-    w |= w >> 2;
-    w |= w >> 4;
-    w |= w >> 8;
-    w |= w >> 16;
-    loop {
-        i ^= p;
-        i = i.wrapping_mul(0xe170_893d);
-        i ^= p >> 16;
-        i ^= (i & w) >> 4;
-        i ^= p >> 8;
-        i = i.wrapping_mul(0x0929_eb3f);
-        i ^= p >> 23;
-        i ^= (i & w) >> 1;
-        i = i.wrapping_mul(1 | p >> 27);
-        i = i.wrapping_mul(0x6935_fa69);
-        i ^= (i & w) >> 11;
-        i = i.wrapping_mul(0x74dc_b303);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0x9e50_1cc3);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0xc860_a3df);
-        i &= w;
-        i ^= i >> 5;
-        if i < l {
-            return (i + p % l) % l;
-        }
-    }
-}
-
 /// Three uniform numbers in [0, 1) from one hash.
 #[inline]
 fn random3(h: u64) -> [f64; 3] {
@@ -257,7 +222,7 @@ fn random2(state: u64, k: u32) -> (f64, f64) {
 
 /// splitmix64's finaliser: a fast bijective mix with good avalanche.
 #[inline]
-fn mix(mut z: u64) -> u64 {
+pub(super) fn mix(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
@@ -315,44 +280,11 @@ mod tests {
     }
 
     #[test]
-    fn permutations_are_permutations() {
-        for l in [1, 2, 3, 4, 9, 16, 25, 64, 100, 256, 4096] {
-            for p in [0, 1, 0xdead_beef, u32::MAX, 0x8000_0001] {
-                let mut seen = vec![false; l as usize];
-                for i in 0..l {
-                    let j = permute(i, l, p) as usize;
-                    assert!(!seen[j], "l {l} p {p}: {j} twice");
-                    seen[j] = true;
-                }
-            }
-        }
-    }
-
-    #[test]
     fn time_and_lens_coordinates_are_the_readmes() {
-        // Bits from tests/reference/sample_dims_reference.py, written from the README alone.
+        // Bits from tests/reference/sample_dims_reference.py, written from "Time and lens
+        // coordinates" in docs/spec/tracer.md alone. Grid has none: on film frames its
+        // samples are Sobol' points (see sobol.rs's film_points_are_the_specs).
         let cases = [
-            (
-                Pattern::Grid(2),
-                7,
-                12345,
-                0,
-                [0x3fdca9cd3ee71220, 0x3fd99d1b48f03702, 0x3fde0671cead9d54],
-            ),
-            (
-                Pattern::Grid(2),
-                7,
-                12345,
-                3,
-                [0x3fe357f332df7f36, 0x3fe4b7e2309593c4, 0x3fe08da2f6e27eb8],
-            ),
-            (
-                Pattern::Grid(3),
-                3,
-                999,
-                8,
-                [0x3fca06f014089647, 0x3fec18d0f1f72689, 0x3fd22f4e344f666a],
-            ),
             (
                 Pattern::R2,
                 7,
@@ -384,29 +316,6 @@ mod tests {
                 "{pattern:?} frame {frame} pixel {pixel} sample {k}"
             );
         }
-    }
-
-    #[test]
-    fn grid_samples_use_each_time_stratum_and_lens_cell_once() {
-        let pattern = Pattern::Grid(4);
-        let d = Dims::new(pattern, 7, 12345);
-        let (mut strata, mut cells) = ([false; 16], [false; 16]);
-        for k in 0..16 {
-            let [t, a, b] = d.at(pattern, k);
-            let s = (t * 16.0) as usize;
-            let c = (b * 4.0) as usize * 4 + (a * 4.0) as usize;
-            assert!(
-                !strata[s] && !cells[c],
-                "sample {k}: stratum {s}, cell {c} again"
-            );
-            (strata[s], cells[c]) = (true, true);
-        }
-        // Paired differently in another pixel.
-        let other = Dims::new(pattern, 7, 12346);
-        assert!(
-            (0..16).any(|k| (d.at(pattern, k)[0] * 16.0) as usize
-                != (other.at(pattern, k)[0] * 16.0) as usize)
-        );
     }
 
     #[test]

@@ -121,7 +121,7 @@ pub fn reference_settings(base: &Settings, trees: bool) -> Settings {
 }
 
 /// The ladder of settings measured against the reference.
-pub fn ladder(base: &Settings) -> Vec<(&'static str, String, Settings, bool)> {
+pub fn ladder(base: &Settings, film: bool) -> Vec<(&'static str, String, Settings, bool)> {
     let mut out = Vec::new();
     let with = |samples, adaptive, max_depth| Settings {
         samples,
@@ -161,7 +161,7 @@ pub fn ladder(base: &Settings) -> Vec<(&'static str, String, Settings, bool)> {
         (Quality::Final, "final"),
     ] {
         let mut s = with(1, None, base.max_depth);
-        preset(&mut s, q);
+        preset(&mut s, q, film);
         out.push(("preset", name.to_string(), s, q == Quality::Draft));
     }
     out
@@ -339,7 +339,7 @@ pub(crate) fn measure(
     };
     let convergence = compare(&render_with(&world, seq, n, &half)?.to_rgb8(), &ref_image);
     let mut rows = Vec::new();
-    for (group, label, settings, half) in ladder(&seq.settings) {
+    for (group, label, settings, half) in ladder(&seq.settings, seq.film()) {
         let (image, spp, times) = timed(&world, seq, n, &settings, half, runs)?;
         let error = compare(&image, &ref_image);
         progress(&format!("{label}: rmse {:.3}", error.rmse));

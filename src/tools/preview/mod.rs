@@ -84,7 +84,7 @@ pub const TILE_WIDTH: u32 = 256;
 /// sheet shows the background), in the file's encoding and exposure.
 pub fn draft(seq: &Sequence, tile_w: u32, tile_h: u32) -> Sequence {
     let mut d = seq.clone();
-    crate::sequence::preset(&mut d.settings, crate::sequence::Quality::Draft);
+    crate::sequence::preset(&mut d.settings, crate::sequence::Quality::Draft, false);
     d.settings.width = tile_w;
     d.settings.height = tile_h;
     d.settings.alpha = false;
