@@ -30,7 +30,7 @@ pub(super) struct Pass<'a> {
     pub frame: u64,
     pub samples: Samples,
     /// Adaptive sampling in rounds (`adaptive`): what a pass records of each pixel is its
-    /// samples' variance, not their spread.
+    /// error estimate (how far two halves of its samples disagree), not their spread.
     pub rounds: bool,
     /// `Geometry::from_origin` of the camera position.
     pub from_origin: &'a [FromOrigin],
@@ -169,7 +169,7 @@ pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
 
 /// A pass that adds samples to the pixels `marked` (row-major indices) of a frame whose
 /// current means are `rgb` (and coverage `alpha`); writes their new means, coverage fourth
-/// and (in rounds) this pass's sample variance fifth, to `out`, one per marked pixel.
+/// and (in rounds) its error estimate fifth, to `out`, one per marked pixel.
 #[inline(always)]
 pub(super) fn marked<V: Lanes>(
     pass: &Pass,
