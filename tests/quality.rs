@@ -258,7 +258,7 @@ fn measure_writes_csv_json_and_a_plot() {
     );
     assert_eq!(
         lines.len(),
-        1 + measure::ladder(&orbit((32, 18)).settings, true).len() + 2
+        1 + measure::ladder(&orbit((32, 18)).settings, sequence::Film::Shutter).len() + 2
     );
     for line in &lines[1..] {
         let cells: Vec<&str> = line.split(',').collect();
@@ -513,7 +513,13 @@ fn film_samples_converge_faster_than_random_and_rounds_spend_where_the_grain_is(
     // The file sets no sampling: film's default, in rounds.
     assert_eq!(
         (base.samples, base.adaptive.map(|a| a.max_samples)),
-        (sequence::FILM_SAMPLES, Some(sequence::FILM_SAMPLING_MAX))
+        (sequence::LENS_SAMPLES, Some(sequence::FILM_SAMPLING_MAX))
+    );
+    // A shutter alone (the orbit) starts rounds from 2 samples, a lens from 4.
+    let shutter = job(&[]).settings;
+    assert_eq!(
+        (shutter.samples, shutter.adaptive.map(|a| a.max_samples)),
+        (sequence::SHUTTER_SAMPLES, Some(sequence::FILM_SAMPLING_MAX))
     );
     let rounds = render(base);
     let pixels = all.len() as u64;

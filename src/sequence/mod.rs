@@ -26,7 +26,7 @@ pub use guard::nesting_depth;
 pub(crate) use messages::{approx, num};
 pub use settings::{
     DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD, FILM_FINAL_MAX,
-    FILM_FINAL_THRESHOLD, FILM_SAMPLES, FILM_SAMPLING_MAX, FILM_THRESHOLD,
+    FILM_FINAL_THRESHOLD, FILM_SAMPLING_MAX, FILM_THRESHOLD, LENS_SAMPLES, SHUTTER_SAMPLES,
 };
 pub(crate) use settings::{Explicit, MAX_SAMPLES, exposure, output_pattern, preset};
 pub(crate) use timeline::{MAX_FIRST_FRAME, rolls_over};
@@ -282,15 +282,30 @@ fn lost_output_pattern(file: &Path, text: &str, used: &str) -> Option<String> {
 }
 
 impl Sequence {
-    /// Whether frames are film, not a pinhole's instant: a shutter on a camera that can move,
-    /// or a lens some key opens.
-    pub(crate) fn film(&self) -> bool {
+    /// What the frames integrate besides the pixel (see `Film`).
+    pub(crate) fn film(&self) -> Film {
         film(&self.settings, &self.timeline)
     }
 }
 
-fn film(s: &Settings, timeline: &Timeline) -> bool {
-    (s.shutter.is_some() && timeline.moves()) || timeline.widest_aperture() > 0.0
+/// What a sequence's frames integrate besides the pixel: a pinhole's instant, the open
+/// shutter of a camera that can move (an orbit, or more than one key), or a lens some key
+/// opens (with or without a shutter). Film (the last two) samples differently.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Film {
+    Pinhole,
+    Shutter,
+    Lens,
+}
+
+fn film(s: &Settings, timeline: &Timeline) -> Film {
+    if timeline.widest_aperture() > 0.0 {
+        Film::Lens
+    } else if s.shutter.is_some() && timeline.moves() {
+        Film::Shutter
+    } else {
+        Film::Pinhole
+    }
 }
 
 /// The sequence, and the first key or frame whose camera cannot be built (see `load_drawable`).

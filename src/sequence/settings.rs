@@ -18,7 +18,7 @@ impl Explicit {
     /// `q`'s values for what the file left unset; on a scene with glass (`glass`), at least
     /// 3 surfaces (in, out, and what is behind) so `draft` still shows through it; on film
     /// (`film`: a shutter or a lens), `final`'s film sampling.
-    pub(crate) fn preset(&self, s: &mut Settings, q: Quality, glass: bool, film: bool) {
+    pub(crate) fn preset(&self, s: &mut Settings, q: Quality, glass: bool, film: Film) {
         preset(s, q, film);
         if glass {
             s.max_depth = s.max_depth.max(GLASS_DEPTH);
@@ -29,7 +29,7 @@ impl Explicit {
     /// The sampling of a sequence: its preset's (`q`), or where it sets no sampling at all,
     /// the default (film's when `film`), under what the file set itself. A preset's
     /// adaptive sampling that the file's own samples already reach is dropped.
-    pub(crate) fn settle(&self, s: &mut Settings, q: Option<Quality>, glass: bool, film: bool) {
+    pub(crate) fn settle(&self, s: &mut Settings, q: Option<Quality>, glass: bool, film: Film) {
         match q {
             Some(q) => self.preset(s, q, glass, film),
             None => {
@@ -86,7 +86,7 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<(Settings, Explicit)> {
     let explicit = explicit(r)?;
     // Glass and film are known once the scene and the timeline are: `validate` settles
     // the sampling again then.
-    explicit.settle(&mut s, r.quality, false, false);
+    explicit.settle(&mut s, r.quality, false, Film::Pinhole);
     if let Some(a) = s.adaptive
         && a.max_samples <= s.samples
     {
@@ -164,10 +164,12 @@ pub(crate) fn exposure(v: f64) -> Result<f64, String> {
 /// frames at about the cost one sample had before the packet tracer (see the README); on
 /// film (a shutter or a lens), enough samples where the grain is, found in rounds
 /// (docs/quality.md#motion-blur-and-depth-of-field).
-fn default_sampling(s: &mut Settings, film: bool) {
+fn default_sampling(s: &mut Settings, film: Film) {
     let (samples, threshold, max_samples) = match film {
-        false => (DEFAULT_SAMPLES, DEFAULT_THRESHOLD, DEFAULT_SAMPLING_MAX),
-        true => (FILM_SAMPLES, FILM_THRESHOLD, FILM_SAMPLING_MAX),
+        Film::Pinhole => (DEFAULT_SAMPLES, DEFAULT_THRESHOLD, DEFAULT_SAMPLING_MAX),
+        // A lens's blur is wider than a shutter's smear: more samples before the first round.
+        Film::Shutter => (SHUTTER_SAMPLES, FILM_THRESHOLD, FILM_SAMPLING_MAX),
+        Film::Lens => (LENS_SAMPLES, FILM_THRESHOLD, FILM_SAMPLING_MAX),
     };
     s.samples = samples;
     s.adaptive = Some(Adaptive {
@@ -181,13 +183,14 @@ pub const DEFAULT_SAMPLES: u32 = 2;
 /// `render.adaptive.max_samples` when a file sets no sampling.
 pub const DEFAULT_SAMPLING_MAX: u32 = 8;
 /// `render.samples`, `render.adaptive.threshold` and `max_samples` when a file with a
-/// shutter or a lens sets no sampling.
-pub const FILM_SAMPLES: u32 = 4;
+/// shutter on a moving camera (`SHUTTER_SAMPLES`) or a lens (`LENS_SAMPLES`) sets no sampling.
+pub const SHUTTER_SAMPLES: u32 = 2;
+pub const LENS_SAMPLES: u32 = 4;
 pub const FILM_THRESHOLD: f64 = 0.025;
 pub const FILM_SAMPLING_MAX: u32 = 64;
 /// `final`'s threshold and most samples on film.
-pub const FILM_FINAL_THRESHOLD: f64 = 0.015;
-pub const FILM_FINAL_MAX: u32 = 128;
+pub const FILM_FINAL_THRESHOLD: f64 = 0.01;
+pub const FILM_FINAL_MAX: u32 = 256;
 
 /// `render.shutter` and `render.shutter_offset`; None when the shutter angle is 0.
 fn shutter(r: &raw::Render) -> Check<Option<Shutter>> {
@@ -219,8 +222,8 @@ pub(crate) const MAX_SAMPLES: u64 = 4096;
 
 /// What a quality preset sets (on film, `final` samples in rounds to a lower threshold);
 /// explicit settings at the same or a later level override it.
-pub(crate) fn preset(s: &mut Settings, q: Quality, film: bool) {
-    let (samples, adaptive, depth) = match (q, film) {
+pub(crate) fn preset(s: &mut Settings, q: Quality, film: Film) {
+    let (samples, adaptive, depth) = match (q, film != Film::Pinhole) {
         (Quality::Draft, _) => (1, None, 2),
         (Quality::Preview, _) => (4, None, 3),
         (Quality::Final, false) => (

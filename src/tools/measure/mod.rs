@@ -8,7 +8,7 @@
 use crate::frame::Frame;
 use crate::scene::Light;
 use crate::schedule::{RunError, render_with};
-use crate::sequence::{Quality, Sequence, preset};
+use crate::sequence::{Film, Quality, Sequence, preset};
 use crate::tracer::{Adaptive, Precision, Sampler, Settings, World};
 use crate::transfer::Encoding;
 use std::time::Instant;
@@ -121,7 +121,7 @@ pub fn reference_settings(base: &Settings, trees: bool) -> Settings {
 }
 
 /// The ladder of settings measured against the reference.
-pub fn ladder(base: &Settings, film: bool) -> Vec<(&'static str, String, Settings, bool)> {
+pub fn ladder(base: &Settings, film: Film) -> Vec<(&'static str, String, Settings, bool)> {
     let mut out = Vec::new();
     let with = |samples, adaptive, max_depth| Settings {
         samples,

@@ -84,7 +84,11 @@ pub const TILE_WIDTH: u32 = 256;
 /// sheet shows the background), in the file's encoding and exposure.
 pub fn draft(seq: &Sequence, tile_w: u32, tile_h: u32) -> Sequence {
     let mut d = seq.clone();
-    crate::sequence::preset(&mut d.settings, crate::sequence::Quality::Draft, false);
+    crate::sequence::preset(
+        &mut d.settings,
+        crate::sequence::Quality::Draft,
+        crate::sequence::Film::Pinhole,
+    );
     d.settings.width = tile_w;
     d.settings.height = tile_h;
     d.settings.alpha = false;
