@@ -477,8 +477,8 @@ fn a_job_that_cannot_fit_in_memory_is_refused_before_it_starts() {
         "{said}"
     );
     assert!(files(&tmp).iter().all(|f| !f.starts_with("big_")));
-    // 1024×1024 with alpha and depth: about 80 MB a frame (with adaptive sampling's buffers). Raising the limit from below what the
-    // process maps (about 1.7 GB here, most of it reserved for threads' arenas), each run is
+    // 1024×1024 with alpha and depth: about 80 MB a frame (with adaptive sampling's buffers).
+    // Raising the limit from below what the process maps (about 1.7 GB here, most of it reserved for threads' arenas), each run is
     // refused until one renders all four frames, never aborting; that one keeps fewer frames
     // in flight than the 4 two threads would.
     let mut shrunk = false;
