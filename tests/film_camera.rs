@@ -510,3 +510,70 @@ fn blurred_and_defocused_frames_do_not_depend_on_the_thread_count() {
         assert!(one == two, "{samples} samples: --threads 1 and 2 differ");
     }
 }
+
+/// A film frame with a lens at film's default sampling (Owen-scrambled Sobol' points, then
+/// rounds from 4 to 64 samples), in f64 and in f32, is bit for bit what
+/// tests/reference/film_reference.py and film_f32_reference.py compute from docs/spec alone.
+#[test]
+fn a_film_frame_is_what_the_spec_says_bit_for_bit() {
+    const SCENE: &str = "render: { width: 40, height: 24, max_depth: 3, encoding: linear }
+camera: { position: [0, 0.1, 1.2], look_at: [-0.1, -0.1, -0.5], up: [0, 1, 0], fov: 70, aperture: 0.08, focus_distance: 1.0 }
+materials:
+  red:    { ambient: [0.1, 0, 0],     diffuse: [0.7, 0, 0],     specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
+  green:  { ambient: [0, 0.1, 0],     diffuse: [0, 0.6, 0],     specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
+  floor:  { ambient: [0.1, 0.1, 0.1], diffuse: [0.6, 0.6, 0.6], specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
+objects:
+  - sphere: { center: [-0.2, 0, -1],  radius: 0.7,  material: red }
+  - sphere: { center: [-0.3, 0, 0],   radius: 0.15, material: green }
+  - plane:  { point: [0, -0.7, 0], normal: [0, 1, 0], material: floor }
+lights:
+  - point: { position: [5, 5, 5], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }
+";
+    let tmp = scratch("film-reference");
+    for (precision, reference) in [
+        ("f64", "film_40x24.f32"),
+        ("f32", "film_40x24_precision_f32.f32"),
+    ] {
+        let yaml = SCENE.replace(
+            "encoding: linear",
+            &format!("encoding: linear, precision: {precision}"),
+        );
+        std::fs::write(tmp.join("s.yaml"), yaml).unwrap();
+        let out = run_in(
+            &tmp,
+            &[
+                "render",
+                "s.yaml",
+                "-q",
+                "--exr-precision",
+                "float",
+                "-o",
+                "f.exr",
+                "--force",
+            ],
+        );
+        assert!(out.status.success(), "{}", stderr(&out));
+        let img = exr::prelude::read_all_flat_layers_from_file(tmp.join("f.exr")).unwrap();
+        let channel = |name: &str| -> Vec<f32> {
+            let c = (img.layer_data[0].channel_data.list.iter())
+                .find(|c| c.name.to_string() == name)
+                .unwrap_or_else(|| panic!("no channel {name}"));
+            c.sample_data.values_as_f32().collect()
+        };
+        let (r, g, b) = (channel("R"), channel("G"), channel("B"));
+        let got: Vec<u32> = (0..r.len())
+            .flat_map(|i| [r[i], g[i], b[i]].map(f32::to_bits))
+            .collect();
+        let bytes = std::fs::read(repo().join("tests/reference").join(reference)).unwrap();
+        let want: Vec<u32> = bytes
+            .chunks(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]).to_bits())
+            .collect();
+        assert_eq!(got.len(), want.len(), "{precision}");
+        let differ = got.iter().zip(&want).filter(|(a, b)| a != b).count();
+        assert_eq!(
+            differ, 0,
+            "{precision}: {differ} channels differ from {reference}"
+        );
+    }
+}

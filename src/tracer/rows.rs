@@ -357,10 +357,12 @@ fn packet<V: Lanes>(
         None => (None, None),
     };
     if halves {
-        let n = |c: u32| V::splat(f64::from(c));
         let (a, b) = match old_rgb {
-            Some(old) => (old, late / n(end - first)),
-            None => (early / n(half - first), late / n(end - half)),
+            Some(old) => (old, late / V::splat(f64::from(end - first))),
+            None => (
+                early / V::splat(f64::from(half - first)),
+                late / V::splat(f64::from(end - half)),
+            ),
         };
         adaptive::disagreement(a, b, zero, one).store_f32(&mut means.spread);
     }
