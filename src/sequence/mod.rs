@@ -28,7 +28,9 @@ pub use settings::{
     DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD, FILM_FINAL_MAX,
     FILM_FINAL_THRESHOLD, FILM_SAMPLING_MAX, FILM_THRESHOLD, LENS_SAMPLES, SHUTTER_SAMPLES,
 };
-pub(crate) use settings::{Explicit, MAX_SAMPLES, exposure, output_pattern, preset};
+pub(crate) use settings::{
+    Explicit, MAX_SAMPLES, default_sampling, exposure, output_pattern, preset,
+};
 pub(crate) use timeline::{MAX_FIRST_FRAME, rolls_over};
 
 use crate::camera::{Camera, Degenerate, Pose};

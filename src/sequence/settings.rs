@@ -164,7 +164,7 @@ pub(crate) fn exposure(v: f64) -> Result<f64, String> {
 /// frames at about the cost one sample had before the packet tracer (see the README); on
 /// film (a shutter or a lens), enough samples where the grain is, found in rounds
 /// (docs/quality.md#motion-blur-and-depth-of-field).
-fn default_sampling(s: &mut Settings, film: Film) {
+pub(crate) fn default_sampling(s: &mut Settings, film: Film) {
     let (samples, threshold, max_samples) = match film {
         Film::Pinhole => (DEFAULT_SAMPLES, DEFAULT_THRESHOLD, DEFAULT_SAMPLING_MAX),
         // A lens's blur is wider than a shutter's smear: more samples before the first round.

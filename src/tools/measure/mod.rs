@@ -8,7 +8,7 @@
 use crate::frame::Frame;
 use crate::scene::Light;
 use crate::schedule::{RunError, render_with};
-use crate::sequence::{Film, Quality, Sequence, preset};
+use crate::sequence::{Film, Quality, Sequence, default_sampling, preset};
 use crate::tracer::{Adaptive, Precision, Sampler, Settings, World};
 use crate::transfer::Encoding;
 use std::time::Instant;
@@ -163,6 +163,25 @@ pub fn ladder(base: &Settings, film: Film) -> Vec<(&'static str, String, Setting
         let mut s = with(1, None, base.max_depth);
         preset(&mut s, q, film);
         out.push(("preset", name.to_string(), s, q == Quality::Draft));
+    }
+    // What the sampler and the default buy: independent samples beside the 16 spp row above,
+    // and a file's default sampling (film's rounds on film) beside the older pinhole default.
+    out.push((
+        "sampler",
+        "16 spp independent".to_string(),
+        Settings {
+            sampler: Sampler::Random,
+            ..with(16, None, base.max_depth)
+        },
+        false,
+    ));
+    for (label, f) in [("default", film), ("pinhole default", Film::Pinhole)] {
+        if label == "pinhole default" && film == Film::Pinhole {
+            continue;
+        }
+        let mut s = with(1, None, base.max_depth);
+        default_sampling(&mut s, f);
+        out.push(("default", label.to_string(), s, false));
     }
     out
 }
