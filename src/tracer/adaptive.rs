@@ -31,7 +31,7 @@ pub(super) fn rounds(
     let mut have = first.settings.samples;
     let mut active: Vec<u32> = (0..(w * h) as u32).collect();
     let mut stats = RowStats::default();
-    while have < a.max_samples && !first.stop.load(std::sync::atomic::Ordering::Relaxed) {
+    while have < a.max_samples && !first.stopped() {
         active = active
             .into_par_iter()
             .filter(|&i| uncertain(error, w, h, i as usize, q))

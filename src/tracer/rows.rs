@@ -39,7 +39,7 @@ pub(super) struct Pass<'a> {
 }
 
 impl Pass<'_> {
-    fn stopped(&self) -> bool {
+    pub(super) fn stopped(&self) -> bool {
         self.stop.load(Ordering::Relaxed)
     }
 }

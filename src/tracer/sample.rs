@@ -88,7 +88,7 @@ impl Seed {
                 )
             }
             Pattern::Independent => random2(self.state, k),
-            Pattern::Sobol => unreachable!("Sobol' points come from `Sobol::at`"),
+            Pattern::Sobol => unreachable!("Sobol' points come from `sobol::Packet::at`"),
         }
     }
 }

@@ -96,9 +96,9 @@ fn laine_karras(mut x: u32, seed: u32) -> u32 {
 }
 
 /// Owen's nested uniform scramble of a 32-bit fraction: bit j (from the top) flipped by a
-/// hash of the bits above it.
-#[inline(always)]
-pub fn scramble(x: u32, seed: u32) -> u32 {
+/// hash of the bits above it. `Packet::at` computes it with the bits already reversed.
+#[cfg(test)]
+fn scramble(x: u32, seed: u32) -> u32 {
     laine_karras(x.reverse_bits(), seed).reverse_bits()
 }
 
