@@ -516,25 +516,13 @@ fn blurred_and_defocused_frames_do_not_depend_on_the_thread_count() {
 /// tests/reference/film_reference.py and film_f32_reference.py compute from docs/spec alone.
 #[test]
 fn a_film_frame_is_what_the_spec_says_bit_for_bit() {
-    const SCENE: &str = "render: { width: 40, height: 24, max_depth: 3, encoding: linear }
-camera: { position: [0, 0.1, 1.2], look_at: [-0.1, -0.1, -0.5], up: [0, 1, 0], fov: 70, aperture: 0.08, focus_distance: 1.0 }
-materials:
-  red:    { ambient: [0.1, 0, 0],     diffuse: [0.7, 0, 0],     specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
-  green:  { ambient: [0, 0.1, 0],     diffuse: [0, 0.6, 0],     specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
-  floor:  { ambient: [0.1, 0.1, 0.1], diffuse: [0.6, 0.6, 0.6], specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
-objects:
-  - sphere: { center: [-0.2, 0, -1],  radius: 0.7,  material: red }
-  - sphere: { center: [-0.3, 0, 0],   radius: 0.15, material: green }
-  - plane:  { point: [0, -0.7, 0], normal: [0, 1, 0], material: floor }
-lights:
-  - point: { position: [5, 5, 5], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }
-";
+    let scene = std::fs::read_to_string(repo().join("tests/reference/film_40x24.yaml")).unwrap();
     let tmp = scratch("film-reference");
     for (precision, reference) in [
         ("f64", "film_40x24.f32"),
         ("f32", "film_40x24_precision_f32.f32"),
     ] {
-        let yaml = SCENE.replace(
+        let yaml = scene.replace(
             "encoding: linear",
             &format!("encoding: linear, precision: {precision}"),
         );

@@ -9,22 +9,8 @@ with the Taylor sin/cos)) and docs/spec/output.md (EXR float channels hold the f
 values). All arithmetic is IEEE-754 f64 on scalar Python floats, in the spec's operation
 order; each pixel's mean is rounded to f32 as the Pixel and Rounds rules say.
 
-The scene is hard-coded (frame 0; no sampling set, so film's default with a lens: 4 samples,
-then rounds up to 64 at threshold 0.025):
-
-    render: { width: 40, height: 24, max_depth: 3, encoding: linear }
-    camera: { position: [0, 0.1, 1.2], look_at: [-0.1, -0.1, -0.5], up: [0, 1, 0], fov: 70, aperture: 0.08, focus_distance: 1.0 }
-    materials:
-      red:    { ambient: [0.1, 0, 0],     diffuse: [0.7, 0, 0],     specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
-      green:  { ambient: [0, 0.1, 0],     diffuse: [0, 0.6, 0],     specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
-      floor:  { ambient: [0.1, 0.1, 0.1], diffuse: [0.6, 0.6, 0.6], specular: [1, 1, 1], shininess: 100, reflection: 0.5 }
-    objects:
-      - sphere: { center: [-0.2, 0, -1],  radius: 0.7,  material: red }
-      - sphere: { center: [-0.3, 0, 0],   radius: 0.15, material: green }
-      - plane:  { point: [0, -0.7, 0], normal: [0, 1, 0], material: floor }
-    lights:
-      - point: { position: [5, 5, 5], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }
-    output: frame.exr
+The scene is film_40x24.yaml beside this script, hard-coded here (frame 0; no sampling set,
+so film's default with a lens: 4 samples, then rounds up to 64 at threshold 0.025).
 
 rayreel's values: `rayreel render SCENE --exr-precision float -o frame.exr` (EXR float
 channels hold the f32 pixel values); `--samples 4` / `--samples 16` give the uniform renders.
