@@ -54,11 +54,7 @@ pub(super) fn roundoff<V: Lanes>() -> f64 {
 impl<'w, V: Lanes> MeshLanes<'w, V> {
     /// The mesh lanes of `hit` (None when no lane hit a triangle).
     #[inline(always)]
-    pub(super) fn of(
-        world: &'w World,
-        hit: &Nearest<V>,
-        point: V3<V>,
-    ) -> Option<MeshLanes<'w, V>> {
+    pub(super) fn of(world: &'w World, hit: &Nearest<V>, point: V3<V>) -> Option<MeshLanes<'w, V>> {
         let hits = hit.hit.bits();
         let mut bits = 0u32;
         for k in 0..V::N {
@@ -245,7 +241,11 @@ pub(super) struct Station<V: Lanes> {
 }
 
 /// The placement, file positions and normals of triangle `prim` of mesh object `object`.
-fn triangle(world: &World, object: usize, prim: u32) -> (Placement, [DVec3; 3], [DVec3; 3], MeshShading) {
+fn triangle(
+    world: &World,
+    object: usize,
+    prim: u32,
+) -> (Placement, [DVec3; 3], [DVec3; 3], MeshShading) {
     let scene = &world.scene;
     let Shape::Mesh {
         mesh,
@@ -292,7 +292,12 @@ fn normals(
 
 /// Corner `i` of one lane's triangle placed, or (`normal`) its vertex normal placed.
 #[inline(never)]
-fn corner(world: &World, (object, prim, _, _): (usize, u32, f64, f64), i: usize, normal: bool) -> DVec3 {
+fn corner(
+    world: &World,
+    (object, prim, _, _): (usize, u32, f64, f64),
+    i: usize,
+    normal: bool,
+) -> DVec3 {
     let (place, q, n, _) = triangle(world, object, prim);
     match normal {
         false => place.point(q[i]),
