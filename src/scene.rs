@@ -191,8 +191,8 @@ pub struct Mesh {
     pub uvs: Option<Vec<DVec2>>,
     /// Vertex indices of each triangle, in the file's order after fanning polygons.
     pub triangles: Vec<[u32; 3]>,
-    /// Whether `normals` came from the file.
-    pub file_normals: bool,
+    /// How many of `normals` came from the file (the rest are averaged from the faces).
+    pub file_normals: usize,
     /// Triangles dropped as degenerate (zero area, a repeated index, a non-finite vertex).
     pub skipped: usize,
     /// Notes for `check` (e.g. materials the file names and rayreel ignores).

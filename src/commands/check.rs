@@ -286,7 +286,7 @@ fn frames(t: &Timeline) -> String {
         "{} at {} fps ({} s{}), {camera}",
         t.frame_count,
         t.fps_text(),
-        sequence::approx(t.clock.duration.unwrap_or(t.frame_count as f64 / t.fps)),
+        t.running_time_text(),
         match t.first_frame() {
             0 => String::new(),
             first => format!(", frames {first}-{}", t.last_frame()),

@@ -23,7 +23,7 @@ use scene::*;
 use settings::*;
 
 pub use guard::nesting_depth;
-pub(crate) use messages::{approx, num};
+pub(crate) use messages::num;
 pub use settings::{
     DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD, FILM_FINAL_MAX,
     FILM_FINAL_THRESHOLD, FILM_SAMPLING_MAX, FILM_THRESHOLD, LENS_SAMPLES, SHUTTER_SAMPLES,
@@ -248,15 +248,51 @@ pub(crate) fn parse_drawable(
         true => Path::new(""),
         false => file.parent().unwrap_or(Path::new("")),
     };
+    let cut = comment_cut(text);
+    // An output the comment cut short may be refused for what is left of it (no file type):
+    // the comment is the cause to name.
+    let located = |e: Invalid| match (&cut, e.path == "output") {
+        (Some(cut), true) => located(Invalid {
+            message: cut.explain(&format!("what is left, `{}`, is refused", cut.kept)),
+            ..e
+        }),
+        _ => located(e),
+    };
     let (mut seq, problem) = validate(raw, &name, base).map_err(located)?;
-    seq.warnings
-        .extend(lost_output_pattern(file, text, &seq.output));
+    if let Some(cut) = &cut {
+        let at = format!("{}:{}:{}", file.display(), cut.line, cut.col);
+        let what = format!("frames go to `{}`", seq.output);
+        seq.warnings
+            .push(format!("{at}: output: {}", cut.explain(&what)));
+    }
     Ok((seq, problem.map(located)))
 }
 
 /// `output: ####.png` unquoted: YAML reads a `#` after a space as the start of a comment, so
-/// the pattern is lost (and the default used) without a word; the line says what was meant.
-fn lost_output_pattern(file: &Path, text: &str, used: &str) -> Option<String> {
+/// the pattern is lost (and the default used, or what is left refused) without a word; the
+/// loader says what was meant.
+struct CommentCut {
+    line: usize,
+    col: usize,
+    /// What YAML kept, what it dropped, and the whole value as written.
+    kept: String,
+    lost: String,
+    whole: String,
+}
+
+impl CommentCut {
+    /// `` `#` after a space starts a YAML comment, so `####.png` was dropped and WHAT; quote
+    /// the pattern: output: "frames/####.png" ``.
+    fn explain(&self, what: &str) -> String {
+        format!(
+            "`#` after a space starts a YAML comment, so `{}` was dropped and {what}; quote the pattern: output: \"{}\"",
+            self.lost, self.whole
+        )
+    }
+}
+
+/// The top-level `output:` line when a comment cut a pattern-like text off its value.
+fn comment_cut(text: &str) -> Option<CommentCut> {
     let (n, line) = text
         .lines()
         .enumerate()
@@ -271,15 +307,12 @@ fn lost_output_pattern(file: &Path, text: &str, used: &str) -> Option<String> {
         .or(value.starts_with('#').then_some(0))?;
     let lost = value[comment + 1..].trim();
     let pattern_like = lost.starts_with('#') || [".png", ".exr"].iter().any(|e| lost.contains(e));
-    pattern_like.then(|| {
-        format!(
-            "{}:{}:{}: output: `#` after a space starts a YAML comment, so `{}` was dropped and frames go to `{used}`; quote the pattern: output: \"{}\"",
-            file.display(),
-            n + 1,
-            "output:".len() + comment + 1,
-            value[comment..].trim(),
-            value.trim()
-        )
+    pattern_like.then(|| CommentCut {
+        line: n + 1,
+        col: "output:".len() + comment + 1,
+        kept: value[..comment].trim().to_string(),
+        lost: value[comment..].trim().to_string(),
+        whole: value.trim().to_string(),
     })
 }
 

@@ -329,7 +329,7 @@ mod tests {
             positions,
             uvs: None,
             triangles,
-            file_normals: false,
+            file_normals: 0,
             skipped: 0,
             notes: Vec::new(),
             digest: 0,

@@ -1,0 +1,372 @@
+//! A user's own shot from start to finish, through the binary: a video encoded from the
+//! frames on disk (rendering only what is missing), drafts that never meet finished frames,
+//! and the smaller things a first session trips over (messages, `check` beside `preview`,
+//! channel files).
+
+mod common;
+use common::*;
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::Stdio;
+
+fn tools() -> bool {
+    have_tool("ffmpeg") && have_tool("ffprobe")
+}
+
+/// A 12-frame shot of the test scene at 48×28 in `dir/seq.yaml`.
+fn shot(dir: &Path) {
+    let timeline = "timeline:\n  fps: 12\n  keyframes:\n    - { time: 0, position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }\n    - { time: 0.9166666666666666, position: [1.5, 0.4, 0.5] }\n";
+    std::fs::write(dir.join("seq.yaml"), sequence(48, 28, timeline)).unwrap();
+}
+
+/// The frames of a video decoded by ffmpeg as raw rgb24.
+fn decoded(video: &Path) -> Vec<u8> {
+    let out = std::process::Command::new("ffmpeg")
+        .args(["-v", "error", "-i"])
+        .arg(video)
+        .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    out.stdout
+}
+
+/// Lossless video, so decoded frames can be compared with the stream byte for byte.
+const LOSSLESS: &str = "-c:v ffv1 -pix_fmt bgr0";
+
+#[test]
+fn a_video_from_finished_frames_renders_nothing_and_holds_the_streams_frames() {
+    if !tools() {
+        return;
+    }
+    let dir = scratch("workflow-video-files");
+    shot(&dir);
+    let o = ["-o", "out/f_####.png"];
+    let rendered = run_in(&dir, &["render", "seq.yaml", "-q", o[0], o[1]]);
+    assert!(rendered.status.success(), "{}", stderr(&rendered));
+    let before: Vec<_> = files(&dir.join("out"))
+        .iter()
+        .map(|f| {
+            std::fs::metadata(dir.join("out").join(f))
+                .unwrap()
+                .modified()
+                .unwrap()
+        })
+        .collect();
+    // The dry run says what is rendered (nothing) and what is encoded.
+    let dry = run_in(
+        &dir,
+        &[
+            "render",
+            "seq.yaml",
+            o[0],
+            o[1],
+            "--video",
+            "v.mkv",
+            "--dry-run",
+        ],
+    );
+    let text = String::from_utf8_lossy(&dry.stdout);
+    assert!(
+        text.contains("12 frames: 12 up to date → rendering 0"),
+        "{text}"
+    );
+    assert!(
+        text.contains("would render: nothing: every selected frame is finished"),
+        "{text}"
+    );
+    assert!(
+        text.contains("then would encode frames 0-11 from out/f_%04d.png into v.mkv"),
+        "{text}"
+    );
+    let args = [
+        "render",
+        "seq.yaml",
+        o[0],
+        o[1],
+        "--video",
+        "v.mkv",
+        "--video-args",
+        LOSSLESS,
+    ];
+    let made = run_in(&dir, &args);
+    let log = stderr(&made);
+    assert!(made.status.success(), "{log}");
+    assert!(log.contains("rendering 0"), "{log}");
+    assert!(
+        log.contains("encoding 12 frames from out/f_%04d.png into v.mkv"),
+        "{log}"
+    );
+    assert!(!log.contains("rendered "), "nothing is rendered: {log}");
+    let after: Vec<_> = files(&dir.join("out"))
+        .iter()
+        .map(|f| {
+            std::fs::metadata(dir.join("out").join(f))
+                .unwrap()
+                .modified()
+                .unwrap()
+        })
+        .collect();
+    assert_eq!(before, after, "the frames are read, not written");
+    // The video holds exactly the frames the stream carries.
+    let stream = run_in(&dir, &["render", "seq.yaml", "--pipe", "raw", "-q"]);
+    assert!(stream.status.success(), "{}", stderr(&stream));
+    assert_eq!(decoded(&dir.join("v.mkv")), stream.stdout);
+}
+
+#[test]
+fn a_video_with_missing_frames_renders_only_those_then_encodes_them_all() {
+    if !tools() {
+        return;
+    }
+    let dir = scratch("workflow-video-missing");
+    shot(&dir);
+    let first = run_in(
+        &dir,
+        &[
+            "render",
+            "seq.yaml",
+            "-q",
+            "-o",
+            "out/f_####.png",
+            "--frames",
+            "0-7",
+        ],
+    );
+    assert!(first.status.success(), "{}", stderr(&first));
+    let args = [
+        "render",
+        "seq.yaml",
+        "-o",
+        "out/f_####.png",
+        "--video",
+        "v.mkv",
+        "--video-args",
+        LOSSLESS,
+    ];
+    let made = run_in(&dir, &args);
+    let log = stderr(&made);
+    assert!(made.status.success(), "{log}");
+    assert!(
+        log.contains("12 frames: 8 up to date, 4 missing → rendering 4"),
+        "{log}"
+    );
+    assert!(log.contains("rendered 4 frames"), "{log}");
+    assert!(log.contains("encoded 12 frames"), "{log}");
+    assert_eq!(files(&dir.join("out")).len(), 12);
+    let stream = run_in(&dir, &["render", "seq.yaml", "--pipe", "raw", "-q"]);
+    assert_eq!(decoded(&dir.join("v.mkv")), stream.stdout);
+    // A file that is not a finished frame stops the video before ffmpeg starts.
+    std::fs::write(dir.join("out/f_0003.png"), b"not a frame").unwrap();
+    let again = [
+        "render",
+        "seq.yaml",
+        "-o",
+        "out/f_####.png",
+        "--video",
+        "w.mkv",
+        "--dry-run",
+    ];
+    let dry = run_in(&dir, &again);
+    let text = String::from_utf8_lossy(&dry.stdout);
+    assert!(text.contains("would render: 3"), "{text}");
+}
+
+#[test]
+fn an_interrupted_video_keeps_its_frames_and_says_what_it_keeps() {
+    if !tools() {
+        return;
+    }
+    let dir = scratch("workflow-video-interrupt");
+    // Frames slow enough to be stopped between them (about 0.2 s each on one thread).
+    let timeline = "timeline:\n  fps: 12\n  keyframes:\n    - { time: 0, position: [0, 0.3, 2], look_at: [-0.1, -0.1, -0.6] }\n    - { time: 2, position: [1.5, 0.4, 0.5] }\n";
+    let yaml = sequence(160, 90, timeline).replace(
+        "render: { width: 160, height: 90 }",
+        "render: { width: 160, height: 90, samples: 36 }",
+    );
+    std::fs::write(dir.join("seq.yaml"), yaml).unwrap();
+    let mut child = bin()
+        .args([
+            "render",
+            "seq.yaml",
+            "-o",
+            "out/f_####.png",
+            "--video",
+            "v.mp4",
+            "-j",
+            "1",
+        ])
+        .current_dir(&dir)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let mut log = String::new();
+    for line in lines.by_ref() {
+        let line = line.unwrap();
+        log += &line;
+        log.push('\n');
+        if line.starts_with("frame 1 written") {
+            signal(&child, libc::SIGINT);
+            break;
+        }
+    }
+    lines.for_each(|l| log += &(l.unwrap() + "\n"));
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{log}");
+    assert!(log.contains("frames already written stay"), "{log}");
+    assert!(
+        log.contains("no video was made yet: run the same command again"),
+        "{log}"
+    );
+    assert!(!dir.join("v.mp4").exists());
+    let kept = files(&dir.join("out")).len();
+    assert!(kept >= 2, "{log}");
+    // Without -o, the run says at the start that an interruption keeps nothing.
+    let dry = run_in(
+        &dir,
+        &["render", "seq.yaml", "--video", "w.mp4", "--dry-run"],
+    );
+    let text = String::from_utf8_lossy(&dry.stdout);
+    assert!(
+        text.contains("would render frames 0-24 straight into w.mp4"),
+        "{text}"
+    );
+    assert!(
+        text.contains("an interruption keeps nothing of w.mp4"),
+        "{text}"
+    );
+}
+
+#[test]
+fn drafts_go_beside_the_frames_and_a_resize_never_replaces_them() {
+    let dir = scratch("workflow-draft");
+    shot(&dir);
+    let full = run_in(&dir, &["render", "seq.yaml", "-q", "--frames", "0-2"]);
+    assert!(full.status.success(), "{}", stderr(&full));
+    let finished: Vec<Vec<u8>> = files(&dir.join("frames/seq"))
+        .iter()
+        .map(|f| std::fs::read(dir.join("frames/seq").join(f)).unwrap())
+        .collect();
+    let draft = run_in(
+        &dir,
+        &[
+            "render",
+            "seq.yaml",
+            "--quality",
+            "draft",
+            "--frames",
+            "0-2",
+        ],
+    );
+    let log = stderr(&draft);
+    assert!(draft.status.success(), "{log}");
+    assert!(log.contains("3 frames: 3 missing → rendering 3"), "{log}");
+    assert_eq!(
+        files(&dir.join("frames/seq")),
+        [
+            "draft/frame_0000.png",
+            "draft/frame_0001.png",
+            "draft/frame_0002.png",
+            "frame_0000.png",
+            "frame_0001.png",
+            "frame_0002.png"
+        ]
+    );
+    let (w, h, _) = read_png(&dir.join("frames/seq/draft/frame_0000.png"));
+    assert_eq!((w, h), (24, 14));
+    // Another size at the frames' own name is refused unforced, with the reason.
+    let small = run_in(
+        &dir,
+        &["render", "seq.yaml", "--size", "24x14", "--frames", "0-2"],
+    );
+    let log = stderr(&small);
+    assert!(small.status.success(), "{log}");
+    assert!(log.contains("3 frames: 3 kept → rendering 0"), "{log}");
+    assert!(
+        log.contains("made at another size (size: 48x28 → 24x14)"),
+        "{log}"
+    );
+    let now: Vec<Vec<u8>> = ["frame_0000.png", "frame_0001.png", "frame_0002.png"]
+        .iter()
+        .map(|f| std::fs::read(dir.join("frames/seq").join(f)).unwrap())
+        .collect();
+    assert_eq!(now, finished);
+}
+
+#[test]
+fn check_and_preview_give_one_running_time() {
+    let dir = scratch("workflow-running-time");
+    shot(&dir);
+    let check = run_in(&dir, &["check", "seq.yaml"]);
+    let text = String::from_utf8_lossy(&check.stdout);
+    assert!(text.contains("12 at 12 fps (1 s)"), "{text}");
+    let yaml = std::fs::read_to_string(dir.join("seq.yaml")).unwrap();
+    let longer = yaml.replace("time: 0.9166666666666666", "time: 1");
+    std::fs::write(dir.join("seq.yaml"), longer).unwrap();
+    let check = run_in(&dir, &["check", "seq.yaml"]);
+    let text = String::from_utf8_lossy(&check.stdout);
+    // 13 frames at 12 fps run 1.0833 s, whatever the last key's time.
+    assert!(text.contains("13 at 12 fps (1.08 s)"), "{text}");
+}
+
+#[test]
+fn channel_files_have_no_negative_zero() {
+    let dir = scratch("workflow-chan");
+    shot(&dir);
+    let out = run_in(&dir, &["camera", "seq.yaml", "--format", "chan"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    assert!(!text.contains("-0.0 ") && !text.ends_with("-0.0"), "{text}");
+    let out = run_in(
+        &dir,
+        &["camera", "seq.yaml", "--format", "chan", "--frames", "0"],
+    );
+    let first = String::from_utf8_lossy(&out.stdout);
+    assert!(first.starts_with("0 0.0 0.3 2.0 "), "{first}");
+}
+
+#[test]
+fn a_changed_material_names_its_field() {
+    let dir = scratch("workflow-material-field");
+    shot(&dir);
+    let out = run_in(&dir, &["render", "seq.yaml", "-q", "--frames", "0"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let yaml = std::fs::read_to_string(dir.join("seq.yaml")).unwrap();
+    std::fs::write(
+        dir.join("seq.yaml"),
+        yaml.replace("shininess: 100", "shininess: 50"),
+    )
+    .unwrap();
+    let out = run_in(&dir, &["status", "seq.yaml", "--frames", "0"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("stale 0: materials.red (shininess)"),
+        "{text}"
+    );
+}
+
+#[test]
+fn partly_given_normals_are_said_as_they_are() {
+    let dir = scratch("workflow-normals");
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\nf 2 4 3\n";
+    std::fs::write(dir.join("m.obj"), obj).unwrap();
+    let yaml = sequence(32, 18, "").replace(
+        "objects:\n",
+        "objects:\n  - mesh: { file: m.obj, material: red, translate: [0, 0, -3] }\n",
+    );
+    std::fs::write(
+        dir.join("seq.yaml"),
+        yaml + "camera: { position: [0, 0, 1], look_at: [0, 0, 0] }\n",
+    )
+    .unwrap();
+    let out = run_in(&dir, &["check", "seq.yaml"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        text.contains(
+            "normals from the file for 3 of 6 vertices, averaged from the faces for the rest"
+        ),
+        "{text}"
+    );
+}
