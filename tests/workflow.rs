@@ -370,3 +370,66 @@ fn partly_given_normals_are_said_as_they_are() {
         "{text}"
     );
 }
+
+#[test]
+fn models_come_from_libraries_the_user_names_and_nowhere_else() {
+    let dir = scratch("workflow-assets");
+    std::fs::create_dir_all(dir.join("lib/statues")).unwrap();
+    std::fs::create_dir_all(dir.join("shot")).unwrap();
+    std::fs::write(dir.join("lib/statues/m.obj"), uv_sphere(8, 4, false, false)).unwrap();
+    let yaml = sequence(32, 18, "").replace(
+        "objects:\n",
+        "objects:\n  - mesh: { file: statues/m.obj, material: red, translate: [0, 0, -3] }\n",
+    ) + "camera: { position: [0, 0, 1], look_at: [0, 0, -3] }\n";
+    std::fs::write(dir.join("shot/seq.yaml"), &yaml).unwrap();
+    // The sequence's folder alone does not hold it.
+    let out = run_in(&dir, &["check", "shot/seq.yaml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("shot/statues/m.obj: cannot read: No such file"),
+        "{}",
+        stderr(&out)
+    );
+    // Named on the command line (or in RAYREEL_ASSETS), the library is looked in after it.
+    let out = run_in(&dir, &["check", "shot/seq.yaml", "--assets", "lib"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("lib/statues/m.obj"));
+    let out = bin()
+        .args(["render", "shot/seq.yaml", "--dry-run"])
+        .env("RAYREEL_ASSETS", dir.join("lib"))
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    // A link out of the folder is refused unless it leads into a library the user named.
+    std::os::unix::fs::symlink(dir.join("lib/statues"), dir.join("shot/statues")).unwrap();
+    let out = run_in(&dir, &["check", "shot/seq.yaml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("give the folder it is in with --assets"),
+        "{}",
+        stderr(&out)
+    );
+    let out = run_in(&dir, &["check", "shot/seq.yaml", "--assets", "lib"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // The file itself still cannot name an absolute path or climb out.
+    let abs = dir.join("lib/statues/m.obj");
+    for file in [abs.to_str().unwrap(), "../lib/statues/m.obj"] {
+        let bad = yaml.replace("statues/m.obj", file);
+        std::fs::write(dir.join("shot/bad.yaml"), bad).unwrap();
+        let out = run_in(&dir, &["check", "shot/bad.yaml", "--assets", "lib"]);
+        assert_eq!(out.status.code(), Some(2), "{file}");
+        assert!(
+            stderr(&out).contains("must be a relative path"),
+            "{}",
+            stderr(&out)
+        );
+    }
+    let out = run_in(&dir, &["check", "shot/seq.yaml", "--assets", "nowhere"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("--assets nowhere: not a directory"),
+        "{}",
+        stderr(&out)
+    );
+}

@@ -43,7 +43,8 @@ impl Job {
     }
 
     fn load(args: &JobArgs, every_shard: bool) -> Result<Job, JobError> {
-        let mut seq = sequence::load(&args.file)?;
+        let assets = super::asset_folders(&args.assets).map_err(JobError::Usage)?;
+        let mut seq = sequence::load_with(&args.file, &assets)?;
         apply(&mut seq, args)?;
         let frames = frames(&seq, args, every_shard)?;
         Ok(Job {

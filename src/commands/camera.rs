@@ -13,7 +13,7 @@ use std::io::Write;
 const CSV_HEADER: &str = "frame,time,position_x,position_y,position_z,look_at_x,look_at_y,look_at_z,up_x,up_y,up_z,fov,speed,focus_distance";
 
 pub(crate) fn camera(args: CameraArgs) -> Result<(), Error> {
-    let seq = sequence::load(&args.file)?;
+    let seq = sequence::load_with(&args.file, &super::assets(&args.assets)?)?;
     print_warnings(&seq);
     let (first, last) = (seq.timeline.first_frame(), seq.timeline.last_frame());
     let frames = match &args.frames {

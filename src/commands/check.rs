@@ -9,7 +9,7 @@ use crate::settings::Settings;
 use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
 
 pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
-    let seq = sequence::load(&args.file)?;
+    let seq = sequence::load_with(&args.file, &super::assets(&args.assets)?)?;
     print_warnings(&seq);
     let (cost, warning) = cost(&seq, seq.timeline.frame_count);
     for w in warning.into_iter().chain(super::grain::warning(&seq)) {

@@ -77,6 +77,12 @@ fn print_warnings(seq: &Sequence) {
     }
 }
 
+/// The command's model libraries (`--assets`, RAYREEL_ASSETS); a folder that is not one is a
+/// usage error.
+fn assets(flags: &[std::path::PathBuf]) -> Result<Vec<std::path::PathBuf>, Error> {
+    crate::cli::asset_folders(flags).map_err(Error::Usage)
+}
+
 /// A folder `name` in the frames' directory (`frames/orbit/preview`).
 fn beside_frames(seq: &Sequence, name: &str) -> std::path::PathBuf {
     crate::plan::directory(Path::new(&seq.output)).join(name)

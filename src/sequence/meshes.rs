@@ -1,5 +1,6 @@
-//! `mesh:` objects: the file resolved against the sequence file's folder (and kept inside
-//! it), read once however often it is placed, and its placement checked.
+//! `mesh:` objects: the file resolved against the sequence file's folder or a model library
+//! the user named (and kept inside them), read once however often it is placed, and its
+//! placement checked.
 //!
 //! ```yaml
 //! - mesh: { file: models/bunny.ply, material: clay, shading: phong, scale: 10, rotate: [0, 30, 0], translate: [0, -1, 0] }
@@ -12,16 +13,16 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 pub(super) struct Meshes {
-    base: PathBuf,
+    folders: Folders,
     loaded: Vec<Arc<Mesh>>,
     by_path: HashMap<PathBuf, usize>,
     warnings: Vec<String>,
 }
 
 impl Meshes {
-    pub(super) fn new(base: &Path) -> Meshes {
+    pub(super) fn new(folders: &Folders) -> Meshes {
         Meshes {
-            base: base.to_owned(),
+            folders: folders.clone(),
             loaded: Vec::new(),
             by_path: HashMap::new(),
             warnings: Vec::new(),
@@ -41,7 +42,7 @@ impl Meshes {
     /// Reads (or reuses) the file of `m` and checks its placement.
     pub(super) fn place(&mut self, path: &str, m: &raw::Mesh) -> Check<Shape> {
         let field = format!("{path}.file");
-        let file = resolve(&self.base, &field, &m.file, "a mesh")?;
+        let file = resolve(&self.folders, &field, &m.file, "a mesh")?;
         let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
         let index = match self.by_path.get(&key) {
             Some(&i) => i,
@@ -70,10 +71,35 @@ impl Meshes {
     }
 }
 
-/// `file` against the sequence file's folder `base`; like `output`, a sequence file may only
-/// reach below its own folder (no absolute path, no `..`, no link leading out). `what` names
-/// the kind of file in messages ("a mesh", "a texture").
-pub(super) fn resolve(base: &Path, field: &str, file: &str, what: &str) -> Check<PathBuf> {
+/// Where the files a sequence names (meshes, images) are looked for: the sequence file's
+/// folder, then each model library the user named (`--assets`, `RAYREEL_ASSETS`), in order.
+/// A sequence file names none of them itself, so one received from someone else reads only
+/// below its own folder and the libraries its user chose.
+#[derive(Debug, Clone, Default)]
+pub struct Folders {
+    pub(crate) sequence: PathBuf,
+    pub(crate) assets: Vec<PathBuf>,
+}
+
+impl Folders {
+    pub(crate) fn new(sequence: &Path, assets: &[PathBuf]) -> Folders {
+        Folders {
+            sequence: sequence.to_owned(),
+            assets: assets.to_vec(),
+        }
+    }
+
+    /// Every folder, the sequence's first.
+    fn all(&self) -> impl Iterator<Item = &Path> {
+        std::iter::once(self.sequence.as_path()).chain(self.assets.iter().map(PathBuf::as_path))
+    }
+}
+
+/// `file` against `folders`: the first folder that holds it (or the sequence's folder when
+/// none does, for the reader to say it is missing). Like `output`, a name may not be absolute,
+/// start with `~` or hold `..`, and once symbolic links are followed it must stay below one of
+/// the folders. `what` names the kind of file in messages ("a mesh", "a texture").
+pub(super) fn resolve(folders: &Folders, field: &str, file: &str, what: &str) -> Check<PathBuf> {
     let p = Path::new(file);
     let climbs = p
         .components()
@@ -82,28 +108,57 @@ pub(super) fn resolve(base: &Path, field: &str, file: &str, what: &str) -> Check
         return invalid(
             field,
             format!(
-                "{what} file must be a relative path below the sequence file's folder, without `..` (got `{file}`); copy or link it there"
+                "{what} file must be a relative path below the sequence file's folder (or a model library given with --assets), without `..` (got `{file}`)"
             ),
         );
     }
-    let full = base.join(p);
-    let canonical_base = std::fs::canonicalize(if base.as_os_str().is_empty() {
-        Path::new(".")
-    } else {
-        base
-    });
-    if let (Ok(b), Ok(real)) = (canonical_base, std::fs::canonicalize(&full))
-        && !real.starts_with(&b)
-    {
+    let found = folders
+        .all()
+        .map(|f| f.join(p))
+        .find(|full| std::fs::symlink_metadata(full).is_ok());
+    let Some(full) = found else {
+        if folders.assets.is_empty() {
+            return Ok(folders.sequence.join(p));
+        }
+        let looked: Vec<String> = folders.all().map(|f| shown_folder(f)).collect();
         return invalid(
             field,
             format!(
-                "`{file}` leads outside the sequence file's folder once symbolic links are followed (to {}); copy the file there",
+                "`{file}` is in none of the folders looked in: {}",
+                looked.join(", ")
+            ),
+        );
+    };
+    let Ok(real) = std::fs::canonicalize(&full) else {
+        return Ok(full);
+    };
+    let inside = folders
+        .all()
+        .filter_map(|f| std::fs::canonicalize(shown_path(f)).ok())
+        .any(|root| real.starts_with(root));
+    if !inside {
+        return invalid(
+            field,
+            format!(
+                "`{file}` leads outside the sequence file's folder once symbolic links are followed (to {}); copy the file there, or give the folder it is in with --assets",
                 real.display()
             ),
         );
     }
     Ok(full)
+}
+
+/// A folder as a path to open: the current directory for the empty path (stdin's folder).
+fn shown_path(folder: &Path) -> &Path {
+    match folder.as_os_str().is_empty() {
+        true => Path::new("."),
+        false => folder,
+    }
+}
+
+/// A folder as messages name it.
+fn shown_folder(folder: &Path) -> String {
+    crate::console::printable(&shown_path(folder).display().to_string()).into_owned()
 }
 
 fn placement(path: &str, m: &raw::Mesh) -> Check<Placement> {

@@ -23,6 +23,7 @@ use scene::*;
 use settings::*;
 
 pub use guard::nesting_depth;
+pub use meshes::Folders;
 pub(crate) use messages::num;
 pub use settings::{
     DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD, FILM_FINAL_MAX,
@@ -133,14 +134,26 @@ fn invalid<T>(path: impl Into<String>, message: impl Into<String>) -> Check<T> {
 /// Reads and validates the sequence file at `file` (`-` reads standard input). Only the file
 /// decides the result: the command line's settings are applied afterwards, by the job.
 pub fn load(file: &Path) -> Result<Sequence, LoadError> {
-    parse(file, &read(file)?)
+    load_with(file, &[])
 }
 
-/// `load`, except that a file whose every field is valid but whose camera cannot be built at
-/// some key or frame still loads: that error comes back beside the sequence, for `preview` to
-/// draw the path it describes.
-pub(crate) fn load_drawable(file: &Path) -> Result<(Sequence, Option<LoadError>), LoadError> {
-    parse_drawable(file, &read(file)?)
+/// `load`, with mesh and image files also looked for in the model libraries `assets` (after
+/// the sequence file's folder; see `Folders`).
+pub fn load_with(file: &Path, assets: &[PathBuf]) -> Result<Sequence, LoadError> {
+    match parse_drawable(file, &read(file)?, assets)? {
+        (_, Some(problem)) => Err(problem),
+        (seq, None) => Ok(seq),
+    }
+}
+
+/// `load_with`, except that a file whose every field is valid but whose camera cannot be
+/// built at some key or frame still loads: that error comes back beside the sequence, for
+/// `preview` to draw the path it describes.
+pub(crate) fn load_drawable(
+    file: &Path,
+    assets: &[PathBuf],
+) -> Result<(Sequence, Option<LoadError>), LoadError> {
+    parse_drawable(file, &read(file)?, assets)
 }
 
 /// Whether `file` names standard input (`-`).
@@ -199,7 +212,7 @@ fn too_large(file: &Path, len: u64) -> LoadError {
 
 /// `load` for text already in memory; `file` is only used to name things.
 pub fn parse(file: &Path, text: &str) -> Result<Sequence, LoadError> {
-    match parse_drawable(file, text)? {
+    match parse_drawable(file, text, &[])? {
         (_, Some(problem)) => Err(problem),
         (seq, None) => Ok(seq),
     }
@@ -209,6 +222,7 @@ pub fn parse(file: &Path, text: &str) -> Result<Sequence, LoadError> {
 pub(crate) fn parse_drawable(
     file: &Path,
     text: &str,
+    assets: &[PathBuf],
 ) -> Result<(Sequence, Option<LoadError>), LoadError> {
     // Editors on Windows start UTF-8 files with a byte-order mark; libyaml would take it for
     // the start of a second document.
@@ -258,7 +272,8 @@ pub(crate) fn parse_drawable(
         }),
         _ => located(e),
     };
-    let (mut seq, problem) = validate(raw, &name, base).map_err(located)?;
+    let folders = Folders::new(base, assets);
+    let (mut seq, problem) = validate(raw, &name, &folders).map_err(located)?;
     if let Some(cut) = &cut {
         let at = format!("{}:{}:{}", file.display(), cut.line, cut.col);
         let what = format!("frames go to `{}`", seq.output);
@@ -344,9 +359,13 @@ fn film(s: &Settings, timeline: &Timeline) -> Film {
 }
 
 /// The sequence, and the first key or frame whose camera cannot be built (see `load_drawable`).
-fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Option<Invalid>)> {
+fn validate(
+    raw: raw::Sequence,
+    name: &str,
+    folders: &Folders,
+) -> Check<(Sequence, Option<Invalid>)> {
     let (mut settings, explicit) = render_settings(&raw.render)?;
-    let (scene, mut warnings) = scene_of(&raw, base)?;
+    let (scene, mut warnings) = scene_of(&raw, folders)?;
     let camera = raw.camera.as_ref().map(camera_key).transpose()?;
     let loaded = match (&raw.timeline, camera) {
         (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
@@ -378,14 +397,14 @@ fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Opt
     Ok((seq, loaded.problem))
 }
 
-/// The background, materials, objects (meshes read from below `base`) and lights, checked in
-/// that order, with the meshes' warnings.
-fn scene_of(raw: &raw::Sequence, base: &Path) -> Check<(Scene, Vec<String>)> {
+/// The background, materials, objects (meshes read from below `folders`) and lights, checked
+/// in that order, with the meshes' warnings.
+fn scene_of(raw: &raw::Sequence, folders: &Folders) -> Check<(Scene, Vec<String>)> {
     let background = color(
         "render.background",
         raw.render.background.unwrap_or_default(),
     )?;
-    let mut textures = textures::Textures::new(base);
+    let mut textures = textures::Textures::new(folders);
     let mut materials = Vec::new();
     for (name, m) in &raw.materials.0 {
         materials.push(material(&format!("materials.{name}"), m, &mut textures)?);
@@ -401,7 +420,7 @@ fn scene_of(raw: &raw::Sequence, base: &Path) -> Check<(Scene, Vec<String>)> {
             ),
         );
     }
-    let mut meshes = meshes::Meshes::new(base);
+    let mut meshes = meshes::Meshes::new(folders);
     for (i, o) in raw.objects.iter().enumerate() {
         let path = format!("objects[{i}]");
         let files = (&mut meshes, &mut textures);

@@ -24,14 +24,14 @@ const MIN_CELL: f64 = 1e-100;
 
 /// The images the materials use, in order of first use, each read once.
 pub(super) struct Textures {
-    base: PathBuf,
+    folders: super::meshes::Folders,
     by_path: HashMap<(PathBuf, bool), Arc<Image>>,
 }
 
 impl Textures {
-    pub(super) fn new(base: &Path) -> Textures {
+    pub(super) fn new(folders: &super::meshes::Folders) -> Textures {
         Textures {
-            base: base.to_owned(),
+            folders: folders.clone(),
             by_path: HashMap::new(),
         }
     }
@@ -75,7 +75,7 @@ impl Textures {
             }
         };
         let f = format!("{field}.image");
-        let path = super::meshes::resolve(&self.base, &f, file, "a texture")?;
+        let path = super::meshes::resolve(&self.folders, &f, file, "a texture")?;
         let linear = map.encoding == Some(raw::ImageEncoding::Linear);
         let key = (
             std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone()),
