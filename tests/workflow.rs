@@ -433,3 +433,166 @@ fn models_come_from_libraries_the_user_names_and_nowhere_else() {
         stderr(&out)
     );
 }
+
+/// A z-up pillar as a scan might come: 2 × 4 across, 10 tall along z, its foot at z = 5.
+const PILLAR: &str = "v 10 20 5\nv 12 20 5\nv 12 24 5\nv 10 24 5\nv 10 20 15\nv 12 20 15\nv 12 24 15\nv 10 24 15\n\
+f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
+
+/// `check`'s bounds of object 0 as six numbers.
+fn bounds(text: &str) -> Vec<f64> {
+    let line = text
+        .lines()
+        .find(|l| l.contains("objects[0]:"))
+        .expect("a bounds line");
+    let nums: String = line
+        .split("bounds ")
+        .nth(1)
+        .unwrap()
+        .chars()
+        .map(|c| if "0123456789.-".contains(c) { c } else { ' ' })
+        .collect();
+    nums.split_whitespace()
+        .map(|n| n.parse().unwrap())
+        .collect()
+}
+
+fn pillar_scene(dir: &Path, mesh: &str, timeline: &str) {
+    std::fs::write(dir.join("pillar.obj"), PILLAR).unwrap();
+    let yaml = sequence(32, 18, timeline).replace(
+        "objects:\n",
+        &format!(
+            "objects:\n  - name: pillar\n    mesh: {{ file: pillar.obj, material: red, {mesh} }}\n"
+        ),
+    );
+    std::fs::write(dir.join("seq.yaml"), yaml).unwrap();
+}
+
+#[test]
+fn up_fit_and_origin_stand_a_z_up_model_where_it_is_asked() {
+    let dir = scratch("workflow-placement");
+    let still = "camera: { position: [0, 1, 6], look_at: [0, 1, 0] }\n";
+    // Up z turns the pillar's 10 to y; fit 2 makes that 2; bottom stands it on translate.
+    pillar_scene(
+        &dir,
+        "up: z, fit: 2, origin: bottom, translate: [1, 0.5, -1]",
+        still,
+    );
+    let out = run_in(&dir, &["check", "seq.yaml"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let b = bounds(&text);
+    let near = |a: f64, b: f64| (a - b).abs() < 1e-4;
+    // x: 2 wide → 0.4, centred on 1; y: 0.5 to 2.5; z: the file's y (4 deep → 0.8), centred on −1.
+    let want = [0.8, 0.5, -1.4, 1.2, 2.5, -0.6];
+    assert!(
+        b.iter().zip(want).all(|(&g, w)| near(g, w)),
+        "{b:?} in {text}"
+    );
+    // Without up, the same fit makes the largest extent of the file's own axes 2.
+    pillar_scene(&dir, "fit: 2, origin: center", still);
+    let text = String::from_utf8_lossy(&run_in(&dir, &["check", "seq.yaml"]).stdout).into_owned();
+    let b = bounds(&text);
+    let want = [-0.2, -0.4, -1.0, 0.2, 0.4, 1.0];
+    assert!(
+        b.iter().zip(want).all(|(&g, w)| near(g, w)),
+        "{b:?} in {text}"
+    );
+    // Every up axis is a quarter turn; a wrong one is refused with the choices.
+    for up in ["x", "-x", "y", "-y", "z", "-z", "+z"] {
+        pillar_scene(&dir, &format!("up: {up}, fit: 1"), still);
+        let out = run_in(&dir, &["check", "seq.yaml"]);
+        assert!(out.status.success(), "{up}: {}", stderr(&out));
+    }
+    pillar_scene(&dir, "up: w", still);
+    let out = run_in(&dir, &["check", "seq.yaml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains(
+            "objects[0].mesh.up: the file's up axis is one of y, z, x, -y, -z, -x (got `w`)"
+        ),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
+fn cameras_aim_at_objects_by_name() {
+    let dir = scratch("workflow-aim");
+    let keys = "timeline:\n  fps: 4\n  keyframes:\n    - { time: 0, position: [0, 1, 6], look_at: { object: pillar } }\n    - { time: 1, position: [3, 1, 6] }\n";
+    pillar_scene(&dir, "up: z, fit: 2, origin: bottom", keys);
+    let out = run_in(&dir, &["camera", "seq.yaml", "--format", "json"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // The centre of the pillar's bounds, carried to the next key.
+    for line in text.lines() {
+        let v: serde_json::Value = serde_json::from_str(line).unwrap();
+        let at: Vec<f64> = v["look_at"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert!(
+            (at[0]).abs() < 1e-12 && (at[1] - 1.0).abs() < 1e-12 && at[2].abs() < 1e-12,
+            "{line}"
+        );
+    }
+    let orbit =
+        "timeline:\n  orbit: { center: { object: pillar }, radius: 5, height: 1, duration: 1 }\n";
+    pillar_scene(&dir, "translate: [0, 0, -30]", orbit);
+    let out = run_in(&dir, &["camera", "seq.yaml", "--frames", "0"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // A name nobody has, a plane, and a name given twice are refused where they are written.
+    let bad = [
+        (
+            "look_at: { object: pillar }",
+            "look_at: { object: pilar }",
+            "no object is named `pilar` (named: `pillar`)",
+        ),
+        (
+            "- name: pillar\n",
+            "- name: pillar\n  - name: pillar\n    sphere: { center: [0, 0, 0], radius: 1, material: red }\n",
+            "`pillar` already names objects[0]",
+        ),
+    ];
+    pillar_scene(&dir, "fit: 1", keys);
+    let yaml = std::fs::read_to_string(dir.join("seq.yaml")).unwrap();
+    for (from, to, want) in bad {
+        std::fs::write(dir.join("bad.yaml"), yaml.replacen(from, to, 1)).unwrap();
+        let out = run_in(&dir, &["check", "bad.yaml"]);
+        assert_eq!(out.status.code(), Some(2), "{to}");
+        assert!(stderr(&out).contains(want), "{want} in {}", stderr(&out));
+    }
+    let floor = yaml
+        .replace("  - plane:", "  - name: floor\n    plane:")
+        .replace("object: pillar", "object: floor");
+    std::fs::write(dir.join("bad.yaml"), floor).unwrap();
+    let out = run_in(&dir, &["check", "bad.yaml"]);
+    assert!(stderr(&out).contains("timeline.keyframes[0].look_at.object: objects[3] (`floor`) is a plane, which has no centre to aim at"), "{}", stderr(&out));
+}
+
+#[test]
+fn check_warns_of_a_camera_inside_a_model_and_a_model_never_seen() {
+    let dir = scratch("workflow-framing");
+    let still = "camera: { position: [0, 1, 6], look_at: [0, 1, 0] }\n";
+    // A scan 50 units across at the origin swallows the camera.
+    pillar_scene(&dir, "scale: 3, translate: [-33, -66, -30]", still);
+    let out = run_in(&dir, &["check", "seq.yaml"]);
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("warning: the camera starts inside the bounds of objects[0] (pillar, pillar.obj, 30 units across): is the model scaled for this scene?"), "{err}");
+    // Behind the camera for the whole shot.
+    pillar_scene(&dir, "fit: 1, translate: [0, 0, 20]", still);
+    let err = stderr(&run_in(&dir, &["check", "seq.yaml"]));
+    assert!(
+        err.contains("warning: objects[0] (pillar, pillar.obj, 1 units across) is never in view"),
+        "{err}"
+    );
+    // Seen: no warning.
+    pillar_scene(&dir, "fit: 1", still);
+    let err = stderr(&run_in(&dir, &["check", "seq.yaml"]));
+    assert!(
+        !err.contains("never in view") && !err.contains("inside the bounds"),
+        "{err}"
+    );
+}

@@ -61,7 +61,7 @@ impl Meshes {
                 self.loaded.len() - 1
             }
         };
-        let place = placement(path, m)?;
+        let place = placement(path, m, &self.loaded[index])?;
         check_reach(path, &place, &self.loaded[index])?;
         Ok(Shape::Mesh {
             mesh: index,
@@ -161,8 +161,12 @@ fn shown_folder(folder: &Path) -> String {
     crate::console::printable(&shown_path(folder).display().to_string()).into_owned()
 }
 
-fn placement(path: &str, m: &raw::Mesh) -> Check<Placement> {
-    let scale = match m.scale {
+/// Where `m` puts `mesh`: `scale` along the file's axes, the file's `up` axis turned to +y,
+/// `rotate`, then `fit` (a uniform factor making the largest extent `fit` scene units) and
+/// `origin` (which point of the bounds `translate` puts in place), all folded into one
+/// placement: world = translate′ + (R·U)·(scale′ ∘ p) (docs/spec/mesh.md#placement).
+fn placement(path: &str, m: &raw::Mesh, mesh: &Mesh) -> Check<Placement> {
+    let mut scale = match m.scale {
         None => DVec3::ONE,
         Some(raw::Scale(v)) => vector(&format!("{path}.scale"), v)?,
     };
@@ -176,14 +180,102 @@ fn placement(path: &str, m: &raw::Mesh) -> Check<Placement> {
         );
     }
     let rotate = vector(&format!("{path}.rotate"), m.rotate.unwrap_or_default())?;
+    let up = up_axis(&format!("{path}.up"), m.up.as_deref())?;
+    let rotation = rotation(rotate) * up;
+    let mut translate = vector(
+        &format!("{path}.translate"),
+        m.translate.unwrap_or_default(),
+    )?;
+    if let Some(fit) = m.fit {
+        let fit = in_range(
+            &format!("{path}.fit"),
+            fit,
+            MIN_SCALE,
+            MAX_MAGNITUDE,
+            "a positive length in [1e-100, 1e100]",
+        )?;
+        let (lo, hi) = placed_bounds(mesh, scale, rotation, DVec3::ZERO);
+        let factor = fit / (hi - lo).max_element();
+        scale *= factor;
+        let small = scale.abs().min_element();
+        if !(small >= MIN_SCALE && scale.abs().max_element() <= MAX_MAGNITUDE) {
+            return invalid(
+                format!("{path}.fit"),
+                format!(
+                    "fitting the model to {} scales it by {}, beyond what coordinates can hold",
+                    num(fit),
+                    num(factor)
+                ),
+            );
+        }
+    }
+    let origin = m.origin.unwrap_or_default();
+    if origin != raw::Origin::File {
+        let (lo, hi) = placed_bounds(mesh, scale, rotation, DVec3::ZERO);
+        let centre = (lo + hi) * 0.5;
+        translate -= match origin {
+            raw::Origin::Bottom => DVec3::new(centre.x, lo.y, centre.z),
+            _ => centre,
+        };
+    }
     Ok(Placement {
         scale,
-        rotation: rotation(rotate),
-        translate: vector(
-            &format!("{path}.translate"),
-            m.translate.unwrap_or_default(),
-        )?,
+        rotation,
+        translate,
     })
+}
+
+/// The rotation turning the file's `up` axis (`y` by default; `z`, `x`, or any of them
+/// negated, `+` allowed) to +y, by quarter turns, so it is exact: z → +y is −90° about X
+/// (Blender's Z-up, −Y-forward files then face +Z), x → +y is 90° about Z, −y is 180° about X,
+/// −z is 90° about X, −x is −90° about Z.
+fn up_axis(path: &str, up: Option<&str>) -> Check<DMat3> {
+    let degrees = match up.map(|u| u.trim_start_matches('+')) {
+        None | Some("y") | Some("Y") => [0.0, 0.0, 0.0],
+        Some("z") | Some("Z") => [-90.0, 0.0, 0.0],
+        Some("x") | Some("X") => [0.0, 0.0, 90.0],
+        Some("-y") | Some("-Y") => [180.0, 0.0, 0.0],
+        Some("-z") | Some("-Z") => [90.0, 0.0, 0.0],
+        Some("-x") | Some("-X") => [0.0, 0.0, -90.0],
+        Some(other) => {
+            return invalid(
+                path,
+                format!(
+                    "the file's up axis is one of y, z, x, -y, -z, -x (got `{}`)",
+                    crate::console::printable(other)
+                ),
+            );
+        }
+    };
+    Ok(rotation(DVec3::from_array(degrees)))
+}
+
+/// The per-axis smallest and largest of translate + R·(scale ∘ p) over the vertices the
+/// mesh's triangles use, each point computed as `Placement::point` does.
+pub(crate) fn placed_bounds(
+    mesh: &Mesh,
+    scale: DVec3,
+    rotation: DMat3,
+    translate: DVec3,
+) -> (DVec3, DVec3) {
+    let place = Placement {
+        scale,
+        rotation,
+        translate,
+    };
+    let mut used = vec![false; mesh.positions.len()];
+    mesh.triangles
+        .iter()
+        .flatten()
+        .for_each(|&i| used[i as usize] = true);
+    let points = mesh.positions.iter().zip(&used).filter(|(_, u)| **u);
+    points.fold(
+        (DVec3::INFINITY, DVec3::NEG_INFINITY),
+        |(lo, hi), (p, _)| {
+            let q = place.point(*p);
+            (lo.min(q), hi.max(q))
+        },
+    )
 }
 
 /// The smallest scale factor accepted: scaled coordinates must stay normal f64 numbers.

@@ -5,6 +5,7 @@
 //! The checks below work on the parsed structs and name the field by its path; `locate` then
 //! finds that path's line and column by walking the document once more.
 
+mod aim;
 mod fields;
 mod guard;
 mod locate;
@@ -87,6 +88,8 @@ pub struct Sequence {
     /// The names of `materials:`, in the order of the first `Scene::materials` (those written
     /// inline in objects follow them there, unnamed).
     pub(crate) material_names: Vec<String>,
+    /// Each object's `name:`, if it has one, in `objects:` order.
+    pub(crate) object_names: Vec<Option<String>>,
     /// Output pattern; a run of `#` stands for the zero-padded frame number.
     pub(crate) output: String,
     /// The file's `render.quality`, if any (draft also halves the resolution).
@@ -360,12 +363,14 @@ fn film(s: &Settings, timeline: &Timeline) -> Film {
 
 /// The sequence, and the first key or frame whose camera cannot be built (see `load_drawable`).
 fn validate(
-    raw: raw::Sequence,
+    mut raw: raw::Sequence,
     name: &str,
     folders: &Folders,
 ) -> Check<(Sequence, Option<Invalid>)> {
     let (mut settings, explicit) = render_settings(&raw.render)?;
+    let object_names = aim::names(&raw.objects)?;
     let (scene, mut warnings) = scene_of(&raw, folders)?;
+    aim::resolve(&mut raw, &scene, &object_names)?;
     let camera = raw.camera.as_ref().map(camera_key).transpose()?;
     let loaded = match (&raw.timeline, camera) {
         (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
@@ -385,6 +390,7 @@ fn validate(
         scene,
         settings,
         material_names: raw.materials.0.iter().map(|(n, _)| n.clone()).collect(),
+        object_names,
         output: output_of(raw.output, name, &timeline)?,
         quality: raw.render.quality,
         explicit,
@@ -466,7 +472,7 @@ fn output_of(output: Option<String>, name: &str, timeline: &Timeline) -> Check<S
 fn camera_key(c: &raw::Camera) -> Check<Key> {
     let pose = Pose {
         position: vector("camera.position", c.position)?,
-        look_at: vector("camera.look_at", c.look_at)?,
+        look_at: vector("camera.look_at", c.look_at.point())?,
         up: direction("camera.up", c.up.unwrap_or([0.0, 1.0, 0.0]))?,
         fov: fov("camera.fov", c.fov.unwrap_or(90.0))?,
     };
