@@ -596,3 +596,109 @@ fn check_warns_of_a_camera_inside_a_model_and_a_model_never_seen() {
         "{err}"
     );
 }
+
+/// The test scene under `background` (a YAML value), seen by a still camera looking a little up.
+fn under_sky(dir: &Path, background: &str) {
+    let yaml = sequence(
+        48,
+        28,
+        "camera: { position: [0, 0.1, 2.5], look_at: [0, 0.3, -1] }\n",
+    )
+    .replace(
+        "render: { width: 48, height: 28 }",
+        &format!("render: {{ width: 48, height: 28, background: {background} }}"),
+    );
+    std::fs::write(dir.join("seq.yaml"), yaml).unwrap();
+}
+
+#[test]
+fn a_sky_is_seen_by_misses_and_mirrors_and_a_flat_colour_costs_nothing() {
+    let dir = scratch("workflow-sky");
+    let render = |name: &str, extra: &[&str]| {
+        let mut args = vec!["render", "seq.yaml", "-q", "-o", name];
+        args.extend(extra);
+        let out = run_in(&dir, &args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        read_png(&dir.join(name))
+    };
+    // A flat colour, then a gradient whose horizon is that colour and whose zenith is blue.
+    under_sky(&dir, "[0.5, 0.5, 0.5]");
+    let (w, _, flat) = render("flat.png", &[]);
+    under_sky(
+        &dir,
+        "{ gradient: { zenith: [0, 0, 1], horizon: [0.5, 0.5, 0.5], ground: [0, 1, 0] } }",
+    );
+    let (_, _, sky) = render("sky.png", &[]);
+    let px = |img: &[u8], x: usize, y: usize| img[3 * (y * w as usize + x)..][..3].to_vec();
+    // The top corner sees the sky above the horizon: bluer than grey.
+    assert_eq!(px(&flat, 0, 0), [188u8, 188, 188]);
+    assert!(
+        px(&sky, 0, 0)[2] > px(&sky, 0, 0)[0] + 20,
+        "{:?}",
+        px(&sky, 0, 0)
+    );
+    // The same scene where nothing misses is unchanged; the image differs only where rays leave.
+    assert_ne!(flat, sky);
+    let check = run_in(&dir, &["check", "seq.yaml"]);
+    let text = String::from_utf8_lossy(&check.stdout);
+    assert!(
+        text.contains(
+            "sky:        gradient, zenith [0, 0, 1], horizon [0.5, 0.5, 0.5], ground [0, 1, 0]"
+        ),
+        "{text}"
+    );
+    // A changed sky makes the frames stale, and says so.
+    under_sky(
+        &dir,
+        "{ gradient: { zenith: [0, 0, 0.9], horizon: [0.5, 0.5, 0.5] } }",
+    );
+    let status = run_in(&dir, &["status", "seq.yaml", "-o", "sky.png"]);
+    assert!(
+        String::from_utf8_lossy(&status.stdout).contains("stale 0: background"),
+        "{}",
+        String::from_utf8_lossy(&status.stdout)
+    );
+    // An image sky: its line in check, and `rotate` turns what the camera sees.
+    std::fs::create_dir_all(dir.join("skies")).unwrap();
+    std::fs::copy(
+        repo().join("sequences/textures/sky.png"),
+        dir.join("skies/noon.png"),
+    )
+    .unwrap();
+    under_sky(&dir, "{ image: skies/noon.png }");
+    let text = String::from_utf8_lossy(&run_in(&dir, &["check", "seq.yaml"]).stdout).into_owned();
+    assert!(
+        text.contains("sky:        skies/noon.png 1024x512 (equirectangular), 11 mip levels"),
+        "{text}"
+    );
+    let (_, _, ahead) = render("image.png", &[]);
+    under_sky(&dir, "{ image: skies/noon.png, rotate: 90 }");
+    let (_, _, turned) = render("turned.png", &[]);
+    assert_ne!(ahead, turned);
+    // With alpha, the sky does not fill what the camera sees of it: those pixels stay clear.
+    let alpha = run_in(
+        &dir,
+        &["render", "seq.yaml", "-q", "--alpha", "-o", "alpha.png"],
+    );
+    assert!(alpha.status.success(), "{}", stderr(&alpha));
+    let rgba = image::open(dir.join("alpha.png")).unwrap().to_rgba8();
+    assert_eq!(rgba.get_pixel(0, 0)[3], 0);
+    // Mistakes name the field.
+    for (bad, want) in [
+        (
+            "{ gradient: { zenith: [0, 0, 1] } }",
+            "missing field `horizon`",
+        ),
+        (
+            "{ image: skies/noon.png, gradient: { zenith: [0, 0, 1], horizon: [1, 1, 1] } }",
+            "give `image:` or `gradient:`, not both",
+        ),
+        ("{ rotate: 3 }", "a sky needs `image:` or `gradient:`"),
+        ("{ image: skies/none.png }", "render.background.image"),
+    ] {
+        under_sky(&dir, bad);
+        let out = run_in(&dir, &["check", "seq.yaml"]);
+        assert_eq!(out.status.code(), Some(2), "{bad}");
+        assert!(stderr(&out).contains(want), "{want}: {}", stderr(&out));
+    }
+}

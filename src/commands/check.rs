@@ -3,7 +3,7 @@
 use super::{Error, out, print_warnings, shown};
 use crate::cli::CheckArgs;
 use crate::console::printable;
-use crate::scene::{Image, Light, Scene, Shape, Texture};
+use crate::scene::{Image, Light, Scene, Shape, Sky, Texture};
 use crate::sequence::{self, Sequence};
 use crate::settings::Settings;
 use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
@@ -106,11 +106,12 @@ fn duration(seconds: f64) -> String {
 pub(crate) fn summary(file: &str, seq: &Sequence) -> String {
     let (scene, s) = (&seq.scene, &seq.settings);
     format!(
-        "{file}: ok\n  objects:    {}\n{}  materials:  {}\n{}  lights:     {}\n{}  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}  output:     {}\n",
+        "{file}: ok\n  objects:    {}\n{}  materials:  {}\n{}{}  lights:     {}\n{}  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}  output:     {}\n",
         objects(scene),
         super::meshes::summary(scene),
         scene.materials.len(),
         textures(scene),
+        sky(scene),
         lights(scene),
         penumbra_notes(scene, s),
         s.width,
@@ -193,6 +194,54 @@ fn textures(scene: &Scene) -> String {
         );
     }
     out
+}
+
+/// The `sky:` line, nothing with a flat background: the image (size, levels, memory, load
+/// time, turn, intensity) or the gradient's colours.
+fn sky(scene: &Scene) -> String {
+    let line = match &scene.sky {
+        None => return String::new(),
+        Some(Sky::Gradient {
+            zenith,
+            horizon,
+            ground,
+        }) => format!(
+            "gradient, zenith {}, horizon {}, ground {}",
+            colour(*zenith),
+            colour(*horizon),
+            colour(*ground)
+        ),
+        Some(Sky::Image {
+            image,
+            rotate,
+            intensity,
+        }) => {
+            let l0 = &image.levels[0];
+            let texels: usize = image.levels.iter().map(|l| l.texels.len()).sum();
+            format!(
+                "{} {}x{} (equirectangular), {} mip levels, {:.1} MiB, read in {:.3} s; rotate {}°, intensity {}",
+                printable(&image.file.to_string_lossy()),
+                l0.width,
+                l0.height,
+                image.levels.len(),
+                (texels * 12) as f64 / (1u64 << 20) as f64,
+                image.load_seconds,
+                sequence::num(*rotate),
+                sequence::num(*intensity)
+            )
+        }
+    };
+    format!("  sky:        {line}\n")
+}
+
+/// A colour as the file writes it: `[0.2, 0.35, 0.7]`.
+fn colour(v: glam::DVec3) -> String {
+    format!(
+        "[{}, {}, {}]",
+        sequence::num(v.x),
+        sequence::num(v.y),
+        sequence::num(v.z)
+    )
 }
 
 /// The `lights:` line: `2 (1 point, 1 ambient)`, or `0 (none)`; area lights with their

@@ -120,7 +120,7 @@ fn scene(scene: &Scene, names: &[String]) -> Vec<(String, String)> {
     };
     let digests: Vec<u64> = scene.meshes.iter().map(|m| m.digest).collect();
     let mut lines = vec![
-        ("background".to_string(), hash(&scene.background)),
+        ("background".to_string(), background(scene)),
         ("objects".into(), hash(&scene.objects)),
         ("lights".into(), hash(&scene.lights)),
         ("meshes".into(), hash(&digests)),
@@ -137,6 +137,18 @@ fn scene(scene: &Scene, names: &[String]) -> Vec<(String, String)> {
     }
     lines.push(("materials.inline".into(), hash(&inline.to_vec())));
     lines
+}
+
+/// The hash of the background: its colour, then (only with one) the sky, as the fingerprint
+/// encodes them.
+fn background(scene: &Scene) -> String {
+    let mut h = Hasher::new();
+    scene.background.canon(&mut h);
+    if let Some(sky) = &scene.sky {
+        h.write(b"sky");
+        sky.canon(&mut h);
+    }
+    h.hex()[..16].to_string()
 }
 
 /// A short hash of each of a material's fields, by their YAML names (`ambient:1a2b3c4d

@@ -406,11 +406,8 @@ fn validate(
 /// The background, materials, objects (meshes read from below `folders`) and lights, checked
 /// in that order, with the meshes' warnings.
 fn scene_of(raw: &raw::Sequence, folders: &Folders) -> Check<(Scene, Vec<String>)> {
-    let background = color(
-        "render.background",
-        raw.render.background.unwrap_or_default(),
-    )?;
     let mut textures = textures::Textures::new(folders);
+    let (background, sky) = textures.background(raw.render.background.as_ref())?;
     let mut materials = Vec::new();
     for (name, m) in &raw.materials.0 {
         materials.push(material(&format!("materials.{name}"), m, &mut textures)?);
@@ -443,6 +440,7 @@ fn scene_of(raw: &raw::Sequence, folders: &Folders) -> Check<(Scene, Vec<String>
         materials,
         lights,
         background,
+        sky,
     };
     Ok((scene, warnings))
 }

@@ -29,7 +29,7 @@ pub struct Render {
     pub width: Option<u64>,
     pub height: Option<u64>,
     pub max_depth: Option<u64>,
-    pub background: Option<V3>,
+    pub background: Option<Background>,
     pub depth: Option<bool>,
     pub samples: Option<u64>,
     pub adaptive: Option<Adaptive>,
@@ -42,6 +42,51 @@ pub struct Render {
     pub shutter_offset: Option<f64>,
     pub precision: Option<crate::settings::Precision>,
     pub aov: Option<Vec<crate::settings::Aov>>,
+}
+
+/// `render.background`: a colour triple, or a sky (`{ image: … }`, `{ gradient: … }`).
+#[derive(Debug, Clone)]
+pub enum Background {
+    Color(V3),
+    Sky(Box<Sky>),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sky {
+    pub image: Option<String>,
+    pub rotate: Option<f64>,
+    pub encoding: Option<ImageEncoding>,
+    pub intensity: Option<f64>,
+    pub gradient: Option<Gradient>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Gradient {
+    pub zenith: V3,
+    pub horizon: V3,
+    pub ground: Option<V3>,
+}
+
+impl<'de> Deserialize<'de> for Background {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct B;
+        impl<'de> Visitor<'de> for B {
+            type Value = Background;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a colour triple [r, g, b] or a sky ({ image: … } or { gradient: … })")
+            }
+            fn visit_seq<A: de::SeqAccess<'de>>(self, seq: A) -> Result<Background, A::Error> {
+                V3::deserialize(de::value::SeqAccessDeserializer::new(seq)).map(Background::Color)
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Background, A::Error> {
+                Sky::deserialize(de::value::MapAccessDeserializer::new(map))
+                    .map(|s| Background::Sky(Box::new(s)))
+            }
+        }
+        d.deserialize_any(B)
+    }
 }
 
 #[derive(Debug, Deserialize)]
