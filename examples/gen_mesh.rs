@@ -135,6 +135,17 @@ fn vertex_normals(pos: &[[f64; 3]], tris: &[[u32; 3]]) -> Vec<[f64; 3]> {
     n.into_iter().map(normalize).collect()
 }
 
+/// A mesh of `pos` and `tris` with area-weighted vertex normals and no uv.
+fn with_normals(pos: Vec<[f64; 3]>, tris: Vec<[u32; 3]>) -> Mesh {
+    let normals = vertex_normals(&pos, &tris);
+    Mesh {
+        pos,
+        normals: Some(normals),
+        uv: None,
+        tris,
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // generators
 
@@ -360,13 +371,7 @@ fn blob(k: usize) -> Mesh {
             }
         }
     }
-    let normals = vertex_normals(&pos, &tris);
-    Mesh {
-        pos,
-        normals: Some(normals),
-        uv: None,
-        tris,
-    }
+    with_normals(pos, tris)
 }
 
 /// A vase turned about the z axis, as a scan would come: z up, 50 units tall, standing on
@@ -413,13 +418,7 @@ fn vase(n: usize) -> Mesh {
         tris.push([foot, at(0, j + 1), at(0, j)]);
         tris.push([lip, at(rings, j), at(rings, j + 1)]);
     }
-    let normals = vertex_normals(&pos, &tris);
-    Mesh {
-        pos,
-        normals: Some(normals),
-        uv: None,
-        tris,
-    }
+    with_normals(pos, tris)
 }
 
 // ---------------------------------------------------------------------------------------

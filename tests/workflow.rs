@@ -9,6 +9,13 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::Stdio;
 
+/// `rayreel ARGS` in `dir` is refused (exit 2) with `want` in its message.
+fn refused(dir: &Path, args: &[&str], want: &str) {
+    let out = run_in(dir, args);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+    assert!(stderr(&out).contains(want), "{want} in {}", stderr(&out));
+}
+
 fn tools() -> bool {
     have_tool("ffmpeg") && have_tool("ffprobe")
 }
@@ -383,12 +390,10 @@ fn models_come_from_libraries_the_user_names_and_nowhere_else() {
     ) + "camera: { position: [0, 0, 1], look_at: [0, 0, -3] }\n";
     std::fs::write(dir.join("shot/seq.yaml"), &yaml).unwrap();
     // The sequence's folder alone does not hold it.
-    let out = run_in(&dir, &["check", "shot/seq.yaml"]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(
-        stderr(&out).contains("shot/statues/m.obj: cannot read: No such file"),
-        "{}",
-        stderr(&out)
+    refused(
+        &dir,
+        &["check", "shot/seq.yaml"],
+        "shot/statues/m.obj: cannot read: No such file",
     );
     // Named on the command line (or in RAYREEL_ASSETS), the library is looked in after it.
     let out = run_in(&dir, &["check", "shot/seq.yaml", "--assets", "lib"]);
@@ -403,12 +408,10 @@ fn models_come_from_libraries_the_user_names_and_nowhere_else() {
     assert!(out.status.success(), "{}", stderr(&out));
     // A link out of the folder is refused unless it leads into a library the user named.
     std::os::unix::fs::symlink(dir.join("lib/statues"), dir.join("shot/statues")).unwrap();
-    let out = run_in(&dir, &["check", "shot/seq.yaml"]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(
-        stderr(&out).contains("give the folder it is in with --assets"),
-        "{}",
-        stderr(&out)
+    refused(
+        &dir,
+        &["check", "shot/seq.yaml"],
+        "give the folder it is in with --assets",
     );
     let out = run_in(&dir, &["check", "shot/seq.yaml", "--assets", "lib"]);
     assert!(out.status.success(), "{}", stderr(&out));
@@ -417,20 +420,13 @@ fn models_come_from_libraries_the_user_names_and_nowhere_else() {
     for file in [abs.to_str().unwrap(), "../lib/statues/m.obj"] {
         let bad = yaml.replace("statues/m.obj", file);
         std::fs::write(dir.join("shot/bad.yaml"), bad).unwrap();
-        let out = run_in(&dir, &["check", "shot/bad.yaml", "--assets", "lib"]);
-        assert_eq!(out.status.code(), Some(2), "{file}");
-        assert!(
-            stderr(&out).contains("must be a relative path"),
-            "{}",
-            stderr(&out)
-        );
+        let args = ["check", "shot/bad.yaml", "--assets", "lib"];
+        refused(&dir, &args, "must be a relative path");
     }
-    let out = run_in(&dir, &["check", "shot/seq.yaml", "--assets", "nowhere"]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(
-        stderr(&out).contains("--assets nowhere: not a directory"),
-        "{}",
-        stderr(&out)
+    refused(
+        &dir,
+        &["check", "shot/seq.yaml", "--assets", "nowhere"],
+        "--assets nowhere: not a directory",
     );
 }
 
@@ -701,4 +697,58 @@ fn a_sky_is_seen_by_misses_and_mirrors_and_a_flat_colour_costs_nothing() {
         assert_eq!(out.status.code(), Some(2), "{bad}");
         assert!(stderr(&out).contains(want), "{want}: {}", stderr(&out));
     }
+}
+
+#[test]
+fn estimates_are_measured_and_nothing_to_render_says_so() {
+    let dir = scratch("workflow-estimate");
+    shot(&dir);
+    let check = run_in(&dir, &["check", "seq.yaml"]);
+    let text = String::from_utf8_lossy(&check.stdout);
+    // `about N s for 12 frames (measured: … tiles … on N threads, … s; … a frame with its file)`,
+    // then the ray count as an upper bound.
+    let cost = text.lines().find(|l| l.starts_with("  cost:")).unwrap();
+    assert!(
+        cost.contains("about ") && cost.contains(" for 12 frames (measured: "),
+        "{cost}"
+    );
+    assert!(cost.contains(" a frame with its file); at most "), "{cost}");
+    assert!(
+        cost.contains(" rays (an upper bound: pixels × samples × (1 + lights) × max_depth)"),
+        "{cost}"
+    );
+    // The dry run estimates what it would render, on the threads asked for.
+    let dry = run_in(
+        &dir,
+        &[
+            "render",
+            "seq.yaml",
+            "--dry-run",
+            "--frames",
+            "0-3",
+            "-j",
+            "1",
+        ],
+    );
+    let text = String::from_utf8_lossy(&dry.stdout);
+    assert!(
+        text.contains(" for 4 frames (measured: ") && text.contains("on 1 thread,"),
+        "{text}"
+    );
+    let out = run_in(&dir, &["render", "seq.yaml", "-q", "--frames", "0-3"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let dry = run_in(
+        &dir,
+        &["render", "seq.yaml", "--dry-run", "--frames", "0-3"],
+    );
+    let text = String::from_utf8_lossy(&dry.stdout);
+    assert!(
+        text.contains("would render: nothing: every selected frame is finished"),
+        "{text}"
+    );
+    assert!(text.contains("cost: nothing to render"), "{text}");
+    assert!(
+        !text.contains("0.00e0") && !text.contains("would render: \n"),
+        "{text}"
+    );
 }

@@ -152,7 +152,7 @@ fn dry_run(
     print_dry_run(
         seq,
         (plan.as_ref(), video, files),
-        frames,
+        (frames, args.threads),
         args.pipe.is_some(),
     )
 }
@@ -358,7 +358,7 @@ fn report_waiting(progress: &Progress, files: &Files, held: &[u64]) {
 fn print_dry_run(
     seq: &Sequence,
     (plan, video, files): (Option<&Plan>, Option<&std::path::Path>, Option<&Files>),
-    frames: &FrameSet,
+    (frames, threads): (&FrameSet, Option<u16>),
     piping: bool,
 ) -> Result<(), Error> {
     let (text, rendering) = match (plan, video) {
@@ -393,7 +393,15 @@ fn print_dry_run(
         }
         (None, None) => (format!("would stream frames: {frames}\n"), frames.clone()),
     };
-    let (cost, warning) = super::check::cost(seq, rendering.len());
+    let threads = threads.map_or_else(
+        || std::thread::available_parallelism().map_or(1, |n| n.get()),
+        usize::from,
+    );
+    let format = match piping {
+        true => None,
+        false => files.map(|f| &f.format),
+    };
+    let (cost, warning) = super::check::cost(seq, &rendering, threads, format);
     if let Some(w) = warning {
         crate::console::warning(&w);
     }
