@@ -165,6 +165,9 @@ struct Probe {
     stopped: bool,
 }
 
+/// Renders a tile of a probed frame: its seconds, and whether it finished.
+type Timed<'a> = dyn Fn(Tile, &(u64, Exposure)) -> (f64, bool) + Sync + 'a;
+
 /// Rounds of `TILES_A_ROUND` tiles of every probed frame, each round's tiles rendered side by
 /// side on the pool: at least `ROUNDS` of them and `MIN_PROBE` seconds (the tiles cycle),
 /// until `BUDGET` is spent. A round's wall time, less the tiles' per-call `overhead` spread
@@ -176,7 +179,7 @@ fn rounds(
     (w, h): (u32, u32),
     threads: usize,
     per_pixel: f64,
-    timed: &(dyn Fn(Tile, &(u64, Exposure)) -> (f64, bool) + Sync),
+    timed: &Timed<'_>,
     overhead: f64,
 ) -> Probe {
     let pixels_a_round = ROUND_SECONDS * threads as f64 / per_pixel;

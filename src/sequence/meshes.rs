@@ -120,7 +120,7 @@ pub(super) fn resolve(folders: &Folders, field: &str, file: &str, what: &str) ->
         if folders.assets.is_empty() {
             return Ok(folders.sequence.join(p));
         }
-        let looked: Vec<String> = folders.all().map(|f| shown_folder(f)).collect();
+        let looked: Vec<String> = folders.all().map(shown_folder).collect();
         return invalid(
             field,
             format!(

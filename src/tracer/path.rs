@@ -96,6 +96,8 @@ fn follow<V: Lanes>(world: &World, eye: &Eye<V>, max_depth: u32, rays: &mut u64)
         let hit = world.geometry.nearest(&ray, from_origin, active);
         let missed = active.andnot(hit.hit);
         if missed.any() && !(depth == 0 && eye.transparent) {
+            // `match`, not `Option::map`, as for `cone` above.
+            #[allow(clippy::manual_map)]
             let spread = match &cone {
                 Some(c) => Some(c.spread),
                 None => None,
