@@ -426,6 +426,7 @@ impl Drop for Watchdog {
 /// `about 45 s`, `about 12 min`, `about 3.4 h`, `about 2.1 days`: two significant digits.
 pub(crate) fn duration(seconds: f64) -> String {
     let (value, unit) = match seconds {
+        s if s < 0.005 => return "under 0.01 s".into(),
         s if s < 1.0 => return format!("{:.2} s", s),
         s if s < 120.0 => (s, "s"),
         s if s < 7200.0 => (s / 60.0, "min"),

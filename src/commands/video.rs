@@ -163,7 +163,7 @@ pub(super) struct FromFiles<'a> {
 /// The note a `--video` run without `-o` starts with: what an interruption keeps.
 pub(super) fn nothing_kept(video: &Path) -> String {
     format!(
-        "frames go straight into ffmpeg and no frame file is written, so an interruption keeps nothing of {}; with -o PATTERN the frames are kept, a rerun renders only what is missing, and the video is encoded from the files",
+        "no frame file is written (each frame is encoded as it renders), so an interruption keeps nothing of {}; with -o PATTERN the frames are kept, a rerun renders only what is missing, and the video is encoded from the files",
         shown(video)
     )
 }
