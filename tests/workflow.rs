@@ -38,6 +38,12 @@ fn decoded(video: &Path) -> Vec<u8> {
     out.stdout
 }
 
+/// When each file below `dir` was last written.
+fn modified(dir: &Path) -> Vec<std::time::SystemTime> {
+    let time = |f: &String| std::fs::metadata(dir.join(f)).unwrap().modified().unwrap();
+    files(dir).iter().map(time).collect()
+}
+
 /// Lossless video, so decoded frames can be compared with the stream byte for byte.
 const LOSSLESS: &str = "-c:v ffv1 -pix_fmt bgr0";
 
@@ -51,15 +57,7 @@ fn a_video_from_finished_frames_renders_nothing_and_holds_the_streams_frames() {
     let o = ["-o", "out/f_####.png"];
     let rendered = run_in(&dir, &["render", "seq.yaml", "-q", o[0], o[1]]);
     assert!(rendered.status.success(), "{}", stderr(&rendered));
-    let before: Vec<_> = files(&dir.join("out"))
-        .iter()
-        .map(|f| {
-            std::fs::metadata(dir.join("out").join(f))
-                .unwrap()
-                .modified()
-                .unwrap()
-        })
-        .collect();
+    let before = modified(&dir.join("out"));
     // The dry run says what is rendered (nothing) and what is encoded.
     let dry = run_in(
         &dir,
@@ -105,15 +103,7 @@ fn a_video_from_finished_frames_renders_nothing_and_holds_the_streams_frames() {
         "{log}"
     );
     assert!(!log.contains("rendered "), "nothing is rendered: {log}");
-    let after: Vec<_> = files(&dir.join("out"))
-        .iter()
-        .map(|f| {
-            std::fs::metadata(dir.join("out").join(f))
-                .unwrap()
-                .modified()
-                .unwrap()
-        })
-        .collect();
+    let after = modified(&dir.join("out"));
     assert_eq!(before, after, "the frames are read, not written");
     // The video holds exactly the frames the stream carries.
     let stream = run_in(&dir, &["render", "seq.yaml", "--pipe", "raw", "-q"]);
