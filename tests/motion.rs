@@ -158,7 +158,7 @@ fn replace_fields(line: &str, fields: &mut Vec<String>) -> String {
         })
         .collect();
     parts.retain(|p| !given.contains(&name(p)));
-    parts.extend(fields.drain(..));
+    parts.append(fields);
     format!("{}{}{}", &line[..open], parts.join(", "), &line[close..])
 }
 
