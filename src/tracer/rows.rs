@@ -290,16 +290,23 @@ fn packet<V: Lanes>(
         }
         let (a, b, times) = (&x[2], &x[3], &x[4]);
         let lights = light_seeds.as_ref().map(|seeds| LightSeeds { seeds, k });
+        // While things move under the open shutter, each lane's instant (else None).
+        let mut js = None;
         let eye = match pass.exposure {
             Some(exposure) => Eye {
-                rays: sampled_rays(
-                    pass,
-                    exposure,
-                    (row, col),
-                    (u, v),
-                    times,
-                    (V::load(a), V::load(b)),
-                ),
+                rays: {
+                    if !pass.instants.is_empty() {
+                        js = Some(std::array::from_fn(|k| instant(times[k]) as u8));
+                    }
+                    sampled_rays(
+                        pass,
+                        exposure,
+                        (row, col),
+                        (u, v),
+                        times,
+                        (V::load(a), V::load(b)),
+                    )
+                },
                 active: V::M::from_bits(px.valid),
                 from_origin: None,
                 transparent: s.alpha,
@@ -319,9 +326,15 @@ fn packet<V: Lanes>(
                 lights,
             },
         };
-        let (c, covered) = match pass.instants.is_empty() {
-            true => path::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays),
-            false => in_instants(pass, &eye, times, &mut stats.rays),
+        let (c, covered) = match &js {
+            None => path::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays),
+            Some(js) => {
+                let rays = &mut stats.rays;
+                V::outlined(
+                    #[inline(always)]
+                    || in_instants(pass, &eye, js, rays),
+                )
+            }
         };
         sum = sum + c;
         if s.alpha {
@@ -531,22 +544,22 @@ fn instant(time: f64) -> usize {
     ((time * INSTANTS as f64) as usize).min(INSTANTS - 1)
 }
 
-/// Traces each lane of `eye` in the world of its own instant: the lanes that share an
-/// instant go together, the others masked off (a lane's result never depends on the
-/// others', so each is what it would be alone).
+/// Traces each lane of `eye` in the world of its own instant `js[lane]` (things move under
+/// the open shutter): the lanes that share an instant go together, the others masked off (a
+/// lane's result never depends on the others', so each is what it would be alone).
 #[inline(always)]
 fn in_instants<V: Lanes>(
     pass: &Pass,
     eye: &Eye<V>,
-    times: &[f64; MAX_LANES],
+    js: &[u8; MAX_LANES],
     rays: &mut u64,
 ) -> (V3<V>, V::M) {
     let mut left = eye.active.bits();
     let (mut colour, mut covered) = (V3::<V>::zero(), V::M::from_bits(0));
     while left != 0 {
-        let j = instant(times[left.trailing_zeros() as usize]);
+        let j = js[left.trailing_zeros() as usize];
         let same = (0..V::N)
-            .filter(|&k| left >> k & 1 == 1 && instant(times[k]) == j)
+            .filter(|&k| left >> k & 1 == 1 && js[k] == j)
             .fold(0u32, |m, k| m | 1 << k);
         left &= !same;
         let mask = V::M::from_bits(same);
@@ -558,7 +571,8 @@ fn in_instants<V: Lanes>(
             footprint: eye.footprint,
             lights: eye.lights,
         };
-        let (c, hit) = path::trace_packet(&pass.instants[j], &one, pass.settings.max_depth, rays);
+        let world = &pass.instants[usize::from(j)];
+        let (c, hit) = path::trace_packet(world, &one, pass.settings.max_depth, rays);
         colour = V3::select(mask, c, colour);
         covered = covered.or(hit.and(mask));
     }
