@@ -55,6 +55,7 @@ pub enum Error {
 impl Error {
     pub fn exit_code(&self) -> u8 {
         match self {
+            Error::Load(LoadError::Memory { .. }) => 1,
             Error::Load(_) | Error::Usage(_) => 2,
             Error::Failed(_) | Error::Run(_) | Error::Incomplete(_) => 1,
             Error::Interrupted(_, code) => *code,
