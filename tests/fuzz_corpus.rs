@@ -100,6 +100,14 @@ fn frame_files_corpus_and_crashes() {
     assert!(grew < 200 * 1024, "peak RSS grew by {grew} kB");
 }
 
+/// The model and texture readers' targets (`mesh_files`, `textures`): their seeds and kept
+/// inputs, and the inputs that once crashed them.
+#[test]
+fn mesh_and_texture_corpora() {
+    replay_bytes("fuzz/corpus/mesh_files", 10, fuzzing::mesh_file);
+    replay_bytes("fuzz/corpus/textures", 8, fuzzing::texture_file);
+}
+
 /// This process's peak resident set, in kB.
 fn peak_rss_kb() -> i64 {
     // SAFETY: getrusage writes only the struct it is given.

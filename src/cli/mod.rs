@@ -67,6 +67,10 @@ pub enum Command {
 pub struct CheckArgs {
     /// The sequence file (YAML; `-` reads standard input).
     pub(crate) file: PathBuf,
+    /// List every mesh file, placement, texture, area light note and warning, where the
+    /// summary shows the first few of each and counts the rest.
+    #[arg(long)]
+    pub(crate) full: bool,
 }
 
 #[derive(Debug, Args)]

@@ -1,6 +1,7 @@
 //! `rayreel check`: a sequence's one-screen summary and what a job of it may cost.
 
-use super::{Error, out, print_warnings, shown};
+use super::screen::{Screen, grouped, runs};
+use super::{Error, out, shown};
 use crate::cli::CheckArgs;
 use crate::console::printable;
 use crate::scene::{Image, Light, Scene, Shape, Texture};
@@ -10,15 +11,21 @@ use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
 
 pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
     let seq = sequence::load(&args.file)?;
-    print_warnings(&seq);
+    let screen = Screen { full: args.full };
+    let warnings: Vec<String> = crate::warnings::for_sequence(&seq)
+        .into_iter()
+        .map(|w| format!("warning: {w}"))
+        .collect();
+    eprint!(
+        "{}",
+        screen.lines(&warnings, warnings.len(), "", "warnings")
+    );
     let (cost, warning) = cost(&seq, seq.timeline.frame_count);
     for w in warning.into_iter().chain(super::grain::warning(&seq)) {
         eprintln!("{w}");
     }
-    out(&format!(
-        "{}  cost:       {cost}\n",
-        summary(&shown(&args.file), &seq)
-    ))
+    let summary = summary(&shown(&args.file), &seq, screen).map_err(Error::Failed)?;
+    out(&format!("{summary}  cost:       {cost}\n"))
 }
 
 /// Jobs above this many rays are called enormous: about 9 hours at `RAYS_PER_SECOND`.
@@ -102,17 +109,18 @@ fn duration(seconds: f64) -> String {
     }
 }
 
-/// The one-screen description `rayreel check` prints.
-pub(crate) fn summary(file: &str, seq: &Sequence) -> String {
+/// The one-screen description `rayreel check` prints (everything with `--full`); an error
+/// when a mesh's hierarchy, built to be measured, does not fit in memory.
+pub(crate) fn summary(file: &str, seq: &Sequence, screen: Screen) -> Result<String, String> {
     let (scene, s) = (&seq.scene, &seq.settings);
-    format!(
+    Ok(format!(
         "{file}: ok\n  objects:    {}\n{}  materials:  {}\n{}  lights:     {}\n{}  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}  output:     {}\n",
         objects(scene),
-        super::meshes::summary(scene),
+        super::meshes::summary(scene, screen)?,
         scene.materials.len(),
-        textures(scene),
+        textures(scene, screen),
         lights(scene),
-        penumbra_notes(scene, s),
+        penumbra_notes(scene, s, screen),
         s.width,
         s.height,
         s.max_depth,
@@ -121,7 +129,7 @@ pub(crate) fn summary(file: &str, seq: &Sequence) -> String {
         timing(&seq.timeline),
         film(seq),
         printable(&seq.output)
-    )
+    ))
 }
 
 /// The `objects:` line: `4 (3 spheres, 1 plane)`, with `, 2 meshes` when there are any.
@@ -151,8 +159,8 @@ fn objects(scene: &Scene) -> String {
 }
 
 /// The `textures:` lines, nothing without textures: each image once (its size, levels,
-/// memory and load time), and the number of checker maps.
-fn textures(scene: &Scene) -> String {
+/// memory and load time; the first few), and the number of checker maps.
+fn textures(scene: &Scene, screen: Screen) -> String {
     let maps = scene
         .materials
         .iter()
@@ -172,20 +180,23 @@ fn textures(scene: &Scene) -> String {
             }
         }
     }
-    let mut out = String::new();
-    for i in images {
-        let l0 = &i.levels[0];
-        let texels: usize = i.levels.iter().map(|l| l.texels.len()).sum();
-        out += &format!(
-            "  texture:    {} {}x{}, {} mip levels, {:.1} MiB, read in {:.3} s\n",
-            printable(&i.file.to_string_lossy()),
-            l0.width,
-            l0.height,
-            i.levels.len(),
-            (texels * 12) as f64 / (1u64 << 20) as f64,
-            i.load_seconds
-        );
-    }
+    let lines: Vec<String> = images
+        .iter()
+        .map(|i| {
+            let l0 = &i.levels[0];
+            let texels: usize = i.levels.iter().map(|l| l.texels.len()).sum();
+            format!(
+                "  texture:    {} {}x{}, {} mip levels, {:.1} MiB, read in {:.3} s",
+                printable(&i.file.to_string_lossy()),
+                l0.width,
+                l0.height,
+                i.levels.len(),
+                (texels * 12) as f64 / (1u64 << 20) as f64,
+                i.load_seconds
+            )
+        })
+        .collect();
+    let mut out = screen.lines(&lines, lines.len(), "              ", "texture images");
     if checkers > 0 {
         out += &format!(
             "  texture:    {} (box-filtered over each ray's footprint)\n",
@@ -196,22 +207,16 @@ fn textures(scene: &Scene) -> String {
 }
 
 /// The `lights:` line: `2 (1 point, 1 ambient)`, or `0 (none)`; area lights with their
-/// points per eye sample: `1 sphere (16 samples)`, `2 rect (16 and 64 samples)`.
+/// points per eye sample, grouped: `1 sphere (16 samples)`, `1000 rect (16 samples)`,
+/// `3 rect (2 with 16, 1 with 64 samples)`.
 fn lights(scene: &Scene) -> String {
     let mut kinds = [0usize; 6];
-    let mut samples: [Vec<String>; 6] = Default::default();
+    let mut samples: [Vec<u32>; 6] = Default::default();
     for l in &scene.lights {
-        let kind = match l {
-            Light::Point { .. } => 0,
-            Light::Directional { .. } => 1,
-            Light::Spot { .. } => 2,
-            Light::Ambient { .. } => 3,
-            Light::Sphere { .. } => 4,
-            Light::Rect { .. } => 5,
-        };
+        let kind = kind_index(l);
         kinds[kind] += 1;
         if let Some(n) = l.area_samples() {
-            samples[kind].push(n.to_string());
+            samples[kind].push(n);
         }
     }
     let light_list: Vec<String> = ["point", "directional", "spot", "ambient", "sphere", "rect"]
@@ -219,9 +224,24 @@ fn lights(scene: &Scene) -> String {
         .zip(kinds)
         .zip(samples)
         .filter(|((_, n), _)| *n > 0)
-        .map(|((k, n), s)| match s.is_empty() {
-            true => format!("{n} {k}"),
-            false => format!("{n} {k} ({} samples)", list(&s)),
+        .map(|((k, n), s)| match grouped(s).as_slice() {
+            [] => format!("{n} {k}"),
+            [(m, _)] => format!("{n} {k} ({m} samples)"),
+            groups => {
+                let each: Vec<String> = groups
+                    .iter()
+                    .take(super::screen::SHOWN)
+                    .map(|(m, c)| format!("{c} with {m}"))
+                    .collect();
+                let more = match groups.len() > super::screen::SHOWN {
+                    true => format!(
+                        " and {} other counts of",
+                        groups.len() - super::screen::SHOWN
+                    ),
+                    false => String::new(),
+                };
+                format!("{n} {k} ({}{more} samples)", list(&each))
+            }
         })
         .collect();
     let list = match light_list.is_empty() {
@@ -229,6 +249,18 @@ fn lights(scene: &Scene) -> String {
         false => light_list.join(", "),
     };
     format!("{} ({list})", scene.lights.len())
+}
+
+/// The place of a light's kind in the `lights:` line.
+fn kind_index(l: &Light) -> usize {
+    match l {
+        Light::Point { .. } => 0,
+        Light::Directional { .. } => 1,
+        Light::Spot { .. } => 2,
+        Light::Ambient { .. } => 3,
+        Light::Sphere { .. } => 4,
+        Light::Rect { .. } => 5,
+    }
 }
 
 /// `16`, `16 and 64`, `4, 16 and 64`.
@@ -244,26 +276,45 @@ fn list(items: &[String]) -> String {
 /// a visible fraction to about 1/64 in the worst case, a couple of 8-bit levels in sRGB.
 pub(crate) const QUIET_PENUMBRA: u64 = 64;
 
-/// A note under `lights:` for each area light whose points per pixel, `samples` × the pixel
-/// samples every pixel gets (`render.samples`; adaptive passes add more only where they
-/// see noise), are below `QUIET_PENUMBRA`.
-fn penumbra_notes(scene: &Scene, s: &Settings) -> String {
-    let mut out = String::new();
+/// A note under `lights:` for each kind and count of area lights whose points per pixel,
+/// `samples` × the pixel samples every pixel gets (`render.samples`; adaptive passes add more
+/// only where they see noise), are below `QUIET_PENUMBRA`: one note for all the lights that
+/// share them (`lights[0-999] (sphere)`).
+fn penumbra_notes(scene: &Scene, s: &Settings, screen: Screen) -> String {
+    let mut groups: Vec<((usize, u32), Vec<usize>)> = Vec::new();
     for (i, l) in scene.lights.iter().enumerate() {
         let Some(m) = l.area_samples() else { continue };
-        let points = u64::from(m) * u64::from(s.samples);
-        if points < QUIET_PENUMBRA {
-            let kind = match l {
-                Light::Sphere { .. } => "sphere",
-                _ => "rect",
-            };
-            out.push_str(&format!(
-                "              note: lights[{i}] ({kind}): {m} samples × {} = {points} points on the light per pixel, under {QUIET_PENUMBRA}: its soft shadows will be noisy; raise its samples or render.samples\n",
-                noun(f64::from(s.samples), "pixel sample"),
-            ));
+        if u64::from(m) * u64::from(s.samples) >= QUIET_PENUMBRA {
+            continue;
+        }
+        let key = (kind_index(l), m);
+        match groups.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, lights)) => lights.push(i),
+            None => groups.push((key, vec![i])),
         }
     }
-    out
+    let notes: Vec<String> = groups
+        .iter()
+        .map(|((kind, m), lights)| {
+            let points = u64::from(*m) * u64::from(s.samples);
+            let kind = if *kind == 4 { "sphere" } else { "rect" };
+            let (its, raise) = match lights.len() {
+                1 => ("its", "its samples"),
+                _ => ("their", "their samples"),
+            };
+            format!(
+                "              note: lights[{}] ({kind}): {m} samples × {} = {points} points on the light per pixel, under {QUIET_PENUMBRA}: {its} soft shadows will be noisy; raise {raise} or render.samples",
+                runs(lights),
+                noun(f64::from(s.samples), "pixel sample"),
+            )
+        })
+        .collect();
+    screen.lines(
+        &notes,
+        notes.len(),
+        "              ",
+        "notes on area lights",
+    )
 }
 
 /// The `frames:` line: `144 at 24 fps (6 s), orbit of radius 3 (1 turn)`.
@@ -357,7 +408,12 @@ fn timing(t: &Timeline) -> String {
         Speed::Constant => {
             let passed: Vec<String> = inner
                 .clone()
+                .take(super::screen::SHOWN)
                 .map(|i| format!("{i} at {:.3} s", k.passes[i]))
+                .chain(
+                    (inner.len() > super::screen::SHOWN)
+                        .then(|| format!("and {} more", inner.len() - super::screen::SHOWN)),
+                )
                 .collect();
             let rate = t.speed_at(k.passes[0]);
             let ignored = match passed.is_empty() {
@@ -371,16 +427,15 @@ fn timing(t: &Timeline) -> String {
         }
         Speed::Keys if k.keys.len() < 2 => return String::new(),
         Speed::Keys => {
-            let stops: Vec<String> = (0..k.keys.len())
+            let stops: Vec<usize> = (0..k.keys.len())
                 .filter(|&i| k.keys[i].ease == Ease::Stop)
-                .map(|i| i.to_string())
                 .collect();
             match stops.is_empty() {
                 true => "each keyframe at its time".to_string(),
                 false => format!(
                     "each keyframe at its time, stopping at keyframe{} {}",
                     if stops.len() == 1 { "" } else { "s" },
-                    stops.join(", ")
+                    runs(&stops)
                 ),
             }
         }

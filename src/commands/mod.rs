@@ -5,6 +5,7 @@ mod check;
 mod grain;
 mod meshes;
 mod render;
+mod screen;
 mod tools;
 mod video;
 

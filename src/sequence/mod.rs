@@ -31,6 +31,7 @@ pub use settings::{
 pub(crate) use settings::{
     Explicit, MAX_SAMPLES, default_sampling, exposure, output_pattern, preset,
 };
+pub(crate) use textures::decode as decode_texture;
 pub(crate) use timeline::{MAX_FIRST_FRAME, rolls_over};
 
 use crate::camera::{Camera, Degenerate, Pose};

@@ -143,7 +143,8 @@ fn mean(t: &Texture) -> DVec3 {
 }
 
 /// Why an image was not read: the file (its message), or the memory it would need.
-enum Refusal {
+#[derive(Debug)]
+pub(crate) enum Refusal {
     File(String),
     Memory(OutOfMemory),
 }
@@ -188,26 +189,35 @@ fn load(path: &Path, linear: bool) -> Result<Image, Refusal> {
         ));
     }
     let bytes = read_regular(path)?;
-    let shown = path.display();
-    let (width, height, texels) = match png {
-        true => png_texels(&bytes, linear, &shown.to_string())?,
-        false => exr_texels(&bytes, &shown.to_string())?,
-    };
-    crate::budget::admit(pyramid_bytes(width, height), || {
-        format!("the mip pyramid of {shown} ({width}x{height})")
-    })?;
     Ok(Image {
         file: path.to_owned(),
-        levels: pyramid(Level {
-            width,
-            height,
-            texels,
-        }),
+        levels: decode(&bytes, png, linear, &path.display().to_string())?,
         // The file's bytes, then the encoding: the file alone does not say how it is read.
         digest: mesh::fnv1a_on(mesh::fnv1a(&bytes), &[u8::from(linear)]),
         bytes: bytes.len() as u64,
         load_seconds: started.elapsed().as_secs_f64(),
     })
+}
+
+/// A PNG or EXR file's bytes as the levels of its pyramid; `shown` names it in messages.
+pub(crate) fn decode(
+    bytes: &[u8],
+    png: bool,
+    linear: bool,
+    shown: &str,
+) -> Result<Vec<Level>, Refusal> {
+    let (width, height, texels) = match png {
+        true => png_texels(bytes, linear, shown)?,
+        false => exr_texels(bytes, shown)?,
+    };
+    crate::budget::admit(pyramid_bytes(width, height), || {
+        format!("the mip pyramid of {shown} ({width}x{height})")
+    })?;
+    Ok(pyramid(Level {
+        width,
+        height,
+        texels,
+    }))
 }
 
 /// The file's bytes: a regular file only (a FIFO must not hang the load), at most

@@ -118,6 +118,28 @@ pub fn load(file: &Path) -> Result<Loaded, MeshError> {
     Ok(loaded)
 }
 
+/// `load` for bytes in memory (the fuzz targets): `ply` picks the reader.
+pub(crate) fn read_bytes(bytes: &[u8], ply: bool) -> Result<Loaded, MeshError> {
+    let name = Path::new(if ply { "bytes.ply" } else { "bytes.obj" });
+    let fail = |f: Fail| MeshError {
+        file: name.to_owned(),
+        where_: f.where_,
+        message: f.message,
+        out_of_memory: f.memory,
+    };
+    let mut input = Input::new(bytes, bytes.len() as u64);
+    let soup = match ply {
+        true => ply::read(&mut input),
+        false => obj::read(&mut input),
+    }
+    .map_err(fail)?;
+    let (digest, size) = input.finish().map_err(fail)?;
+    let mut loaded = finish(name, soup).map_err(fail)?;
+    loaded.mesh.digest = digest;
+    loaded.mesh.bytes = size;
+    Ok(loaded)
+}
+
 /// The file as a stream, once it is known to be a regular file of at most `MAX_MESH_BYTES`.
 fn open(file: &Path) -> Result<Input<std::io::BufReader<std::io::Take<std::fs::File>>>, Fail> {
     use crate::regular::{self, Links, Refused};
