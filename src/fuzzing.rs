@@ -85,14 +85,24 @@ pub fn frame_and_claim_files(bytes: &[u8]) {
     claim::judge_owner_line(&String::from_utf8_lossy(bytes));
 }
 
-/// Any bytes as a PLY and as an OBJ file: a refusal, or a mesh whose arrays agree (one normal,
-/// and texture coordinates if any, per position; every index in range), whose normals are unit
-/// length, and whose used positions are finite-or-skipped within [−1, 1] when brought to other
-/// units. Never a panic.
-pub fn mesh_file(bytes: &[u8]) {
-    for ply in [true, false] {
+/// Any bytes as a PLY file: a refusal, or a mesh whose arrays agree (`mesh_agrees`).
+pub fn ply_file(bytes: &[u8]) {
+    mesh_file(bytes, true)
+}
+
+/// Any bytes as an OBJ file: a refusal, or a mesh whose arrays agree (`mesh_agrees`).
+pub fn obj_file(bytes: &[u8]) {
+    mesh_file(bytes, false)
+}
+
+/// A refusal, or a mesh whose arrays agree (one normal, and texture coordinates if any, per
+/// position; every index in range; the tracer indexes them without checks), whose normals are
+/// unit length, and whose used positions are finite-or-skipped, within [−1, 1] when brought
+/// to other units. Never a panic.
+fn mesh_file(bytes: &[u8], ply: bool) {
+    {
         let Ok(loaded) = sequence::mesh::read_bytes(bytes, ply) else {
-            continue;
+            return;
         };
         let m = &loaded.mesh;
         let n = m.positions.len();

@@ -100,11 +100,12 @@ fn frame_files_corpus_and_crashes() {
     assert!(grew < 200 * 1024, "peak RSS grew by {grew} kB");
 }
 
-/// The model and texture readers' targets (`mesh_files`, `textures`): their seeds and kept
-/// inputs, and the inputs that once crashed them.
+/// The model and texture readers' targets (`ply`, `obj`, `textures`): their seeds and kept
+/// inputs.
 #[test]
-fn mesh_and_texture_corpora() {
-    replay_bytes("fuzz/corpus/mesh_files", 10, fuzzing::mesh_file);
+fn model_and_texture_corpora() {
+    replay_bytes("fuzz/corpus/ply", 4, fuzzing::ply_file);
+    replay_bytes("fuzz/corpus/obj", 5, fuzzing::obj_file);
     replay_bytes("fuzz/corpus/textures", 8, fuzzing::texture_file);
 }
 

@@ -1,7 +1,7 @@
 //! The `meshes:` lines of `rayreel check`: per mesh file its size, what was read and skipped,
 //! the hierarchy's memory and build time, and per placement its bounds.
 
-use super::screen::{Screen, quoted};
+use super::screen::Screen;
 use crate::console::printable;
 use crate::scene::{Mesh, Scene, Shape};
 use crate::tracer::bvh::Bvh;
@@ -77,7 +77,7 @@ fn file(scene: &Scene, i: usize, m: &Mesh, screen: Screen) -> Result<String, Str
         );
     }
     for note in &m.notes {
-        let _ = write!(out, "\n              note: {}", printable(&quoted(note)));
+        let _ = write!(out, "\n              note: {}", printable(note));
     }
     let lines: Vec<String> = placements
         .iter()

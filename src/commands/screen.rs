@@ -1,13 +1,11 @@
 //! What keeps `check` on one screen for any scene: every list it prints (mesh files, their
 //! placements, textures, area lights' notes, warnings) shows its first few items and counts
 //! the rest, saying that `rayreel check --full` lists them all; lists of numbers are grouped
-//! (`1000 sphere (16 samples)`); text taken from files is cut short.
+//! (`1000 sphere (16 samples)`). Text quoted from model files is cut short where it is read
+//! (`sequence::mesh::quoted`).
 
 /// Items a list shows before it counts the rest.
 pub(crate) const SHOWN: usize = 4;
-
-/// The longest text from a file (a note's quoted line, a statement's name) a line shows.
-pub(crate) const QUOTED: usize = 80;
 
 /// How much `check` prints: a screen, or everything (`--full`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -85,14 +83,6 @@ pub(crate) fn runs(indices: &[usize]) -> String {
     }
 }
 
-/// `text` cut to `QUOTED` characters, with `…` where it was cut.
-pub(crate) fn quoted(text: &str) -> String {
-    match text.char_indices().nth(QUOTED) {
-        Some((at, _)) => format!("{}…", &text[..at]),
-        None => text.to_string(),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -117,6 +107,5 @@ mod tests {
         assert_eq!(runs(&[1, 3, 7, 8, 9]), "1, 3 and 7-9");
         assert_eq!(runs(&[0, 2, 4, 6, 8, 10, 11]), "0, 2, 4, 6 and 3 others");
         assert_eq!(grouped([16, 16, 64, 16]), vec![(16, 3), (64, 1)]);
-        assert_eq!(quoted(&"x".repeat(100)).chars().count(), QUOTED + 1);
     }
 }

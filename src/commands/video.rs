@@ -60,7 +60,8 @@ pub(super) fn end_video(
 ) -> Result<Result<Outcome, RunError>, Error> {
     match outcome {
         Ok(Outcome::Complete { .. } | Outcome::ReaderClosed { .. }) => {
-            encoder.finish().map_err(Error::Failed)?;
+            let whole_stream = matches!(outcome, Ok(Outcome::Complete { .. }));
+            encoder.finish(whole_stream).map_err(Error::Failed)?;
             Ok(outcome)
         }
         Ok(Outcome::Interrupted { written, .. }) => {

@@ -175,6 +175,7 @@ impl VideoJob {
             sent: Arc::new(AtomicU64::new(0)),
             frame_bytes: self.frame_bytes(),
             container: self.container,
+            extra: !self.extra.is_empty(),
         })
     }
 
@@ -201,6 +202,8 @@ pub(crate) struct Encoder {
     frame_bytes: u64,
     /// ffmpeg's `-f`: how the written file is checked.
     container: &'static str,
+    /// `--video-args` were given: ffmpeg may rightly keep fewer frames than it was sent.
+    extra: bool,
 }
 
 /// The pipe into ffmpeg, counting what passes.
@@ -246,14 +249,18 @@ impl Encoder {
     }
 
     /// Waits for ffmpeg (the stream must have been closed), then puts the video under its
-    /// name; on any failure the temporary goes and the message ends with ffmpeg's stderr.
-    pub(crate) fn finish(mut self) -> Result<(), String> {
+    /// name once `verify` finds it whole; on any failure the temporary goes and the message
+    /// ends with ffmpeg's stderr. `whole_stream`: ffmpeg read every frame sent (it did not
+    /// end the stream itself).
+    pub(crate) fn finish(mut self, whole_stream: bool) -> Result<(), String> {
         self.stdin = None;
         self.done = true;
         let status = self.child.wait();
         let (said, errors) = self.stderr_tail();
         let result = match status {
-            Ok(s) if s.success() => self.verify(errors, &said).and_then(|()| self.publish()),
+            Ok(s) if s.success() => self
+                .verify(errors, whole_stream, &said)
+                .and_then(|()| self.publish()),
             Ok(s) => Err(format!("ffmpeg failed ({s}){said}")),
             Err(e) => Err(format!("ffmpeg: {e}{said}")),
         };
@@ -285,8 +292,11 @@ impl Encoder {
         (tail, errors)
     }
 
-    /// Whether the temporary is a whole video of the frames sent, though ffmpeg exited 0.
-    fn verify(&self, errors: bool, said: &str) -> Result<(), String> {
+    /// Whether the temporary is a whole video, though ffmpeg exited 0: no error on its
+    /// stderr, a whole container, and with ffprobe, a file it reads without error that holds
+    /// a packet for every frame sent (when ffmpeg read them all under rayreel's own options:
+    /// `--video-args` such as `-t` or `-frames:v` may rightly keep fewer, but not none).
+    fn verify(&self, errors: bool, whole_stream: bool, said: &str) -> Result<(), String> {
         if errors {
             return Err(format!("ffmpeg exited 0 but reported an error{said}"));
         }
@@ -294,19 +304,20 @@ impl Encoder {
             format!("ffmpeg exited 0 but the file it wrote is not whole: {why}{said}")
         })?;
         let sent = self.sent.load(Ordering::Relaxed);
-        if self.frame_bytes == 0 || !sent.is_multiple_of(self.frame_bytes) {
-            return Ok(());
-        }
-        let frames = sent / self.frame_bytes;
-        match probe_packets(&self.temp) {
-            Some(Ok(n)) if n == frames => Ok(()),
-            Some(Ok(n)) => Err(format!(
+        let counted = whole_stream && !self.extra && self.frame_bytes > 0;
+        let frames =
+            (counted && sent.is_multiple_of(self.frame_bytes)).then(|| sent / self.frame_bytes);
+        match (probe_packets(&self.temp), frames) {
+            (Some(Ok(n)), Some(frames)) if n != frames => Err(format!(
                 "ffmpeg exited 0 but the file holds {n} video frames of the {frames} sent{said}"
             )),
-            Some(Err(why)) => Err(format!(
+            (Some(Ok(0)), None) => Err(format!(
+                "ffmpeg exited 0 but the file holds no video frame{said}"
+            )),
+            (Some(Err(why)), _) => Err(format!(
                 "ffprobe cannot read the file ffmpeg wrote: {why}{said}"
             )),
-            None => Ok(()),
+            _ => Ok(()),
         }
     }
 

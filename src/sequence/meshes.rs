@@ -167,8 +167,8 @@ fn too_small(mesh: &Mesh, k: i32, scale: DVec3) -> String {
     format!(
         "{}'s coordinates reach {}, so this scale makes the placed model about {} across; it must be at least {MIN_SCALE:e} across, as f64 cannot trace a smaller one among coordinates up to ±{MAX_MAGNITUDE:e} {}",
         mesh.file.display(),
-        num(reach),
-        num(reach * scale.abs().min_element()),
+        approx(reach),
+        approx(reach * scale.abs().min_element()),
         got(num3(scale))
     )
 }

@@ -12,6 +12,7 @@
 mod input;
 mod obj;
 mod ply;
+mod ply_rows;
 
 use crate::budget::{self, OutOfMemory};
 use crate::scene::Mesh;
@@ -230,25 +231,9 @@ fn finish(file: &Path, soup: Soup) -> Result<Loaded, Fail> {
         }));
     }
     kept.shrink_to_fit();
-    let face = area_weighted(&positions, &kept);
     let file_normals =
         normals.is_some() && has_normal.as_ref().is_none_or(|h| h.iter().all(|&b| b));
-    let normals = match normals {
-        Some(n) => n
-            .iter()
-            .enumerate()
-            .map(|(i, &v)| {
-                let from_file = has_normal.as_ref().is_none_or(|h| h[i]);
-                let u = v.normalize_or_zero();
-                if from_file && u != DVec3::ZERO && u.is_finite() {
-                    u
-                } else {
-                    face[i]
-                }
-            })
-            .collect(),
-        None => face,
-    };
+    let normals = vertex_normals(&positions, &kept, normals, has_normal);
     let mesh = Mesh {
         file: file.to_owned(),
         positions,
@@ -263,6 +248,32 @@ fn finish(file: &Path, soup: Soup) -> Result<Loaded, Fail> {
         load_seconds: 0.0,
     };
     Ok(Loaded { mesh, exponent })
+}
+
+/// The file's normal where it gives a usable one (finite, non-zero: normalised), else the
+/// area-weighted normal of the faces around the vertex.
+fn vertex_normals(
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    normals: Option<Vec<DVec3>>,
+    has_normal: Option<Vec<bool>>,
+) -> Vec<DVec3> {
+    let face = area_weighted(positions, triangles);
+    let Some(n) = normals else {
+        return face;
+    };
+    n.iter()
+        .enumerate()
+        .map(|(i, &v)| {
+            let from_file = has_normal.as_ref().is_none_or(|h| h[i]);
+            let u = v.normalize_or_zero();
+            if from_file && u != DVec3::ZERO && u.is_finite() {
+                u
+            } else {
+                face[i]
+            }
+        })
+        .collect()
 }
 
 /// Coordinates whose largest magnitude is in [2^−32, 2^32] are kept as they are. Others are
@@ -345,6 +356,15 @@ fn area_weighted(p: &[DVec3], triangles: &[[u32; 3]]) -> Vec<DVec3> {
             }
         })
         .collect()
+}
+
+/// Text quoted from a file into a note, cut at 80 characters (`…` where cut): a note stays a
+/// line whatever the file holds.
+pub(crate) fn quoted(text: &str) -> String {
+    match text.char_indices().nth(80) {
+        Some((at, _)) => format!("{}…", &text[..at]),
+        None => text.to_string(),
+    }
 }
 
 /// FNV-1a, 64 bits.

@@ -151,7 +151,7 @@ impl Obj {
             b"f" => self.face(&mut words, n)?,
             b"g" | b"o" | b"s" => {}
             other => {
-                let name = String::from_utf8_lossy(other).into_owned();
+                let name = super::quoted(&String::from_utf8_lossy(other));
                 if !self.ignored.contains(&name) {
                     match self.ignored.len() < 16 {
                         true => self.ignored.push(name),
