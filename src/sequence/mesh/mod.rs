@@ -61,6 +61,15 @@ impl Fail {
             memory: false,
         }
     }
+
+    fn in_file(self, file: &Path) -> MeshError {
+        MeshError {
+            file: file.to_owned(),
+            where_: self.where_,
+            message: self.message,
+            out_of_memory: self.memory,
+        }
+    }
 }
 
 impl From<OutOfMemory> for Fail {
@@ -90,31 +99,17 @@ pub(crate) struct Soup {
 /// Reads the mesh at `file` (already resolved against the sequence file's folder).
 pub fn load(file: &Path) -> Result<Loaded, MeshError> {
     let started = std::time::Instant::now();
-    let fail = |f: Fail| MeshError {
-        file: file.to_owned(),
-        where_: f.where_,
-        message: f.message,
-        out_of_memory: f.memory,
-    };
     let ext = file
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    if ext != "obj" && ext != "ply" {
-        return Err(fail(Fail::whole(
+    let mut loaded = match ext.as_str() {
+        "obj" | "ply" => open(file).and_then(|mut input| parse(&mut input, file, ext == "ply")),
+        _ => Err(Fail::whole(
             "unknown mesh format: the file name must end in .obj or .ply",
-        )));
+        )),
     }
-    let mut input = open(file).map_err(fail)?;
-    let soup = match ext.as_str() {
-        "obj" => obj::read(&mut input),
-        _ => ply::read(&mut input),
-    }
-    .map_err(fail)?;
-    let (digest, bytes) = input.finish().map_err(fail)?;
-    let mut loaded = finish(file, soup).map_err(fail)?;
-    loaded.mesh.digest = digest;
-    loaded.mesh.bytes = bytes;
+    .map_err(|f| f.in_file(file))?;
     loaded.mesh.load_seconds = started.elapsed().as_secs_f64();
     Ok(loaded)
 }
@@ -122,22 +117,23 @@ pub fn load(file: &Path) -> Result<Loaded, MeshError> {
 /// `load` for bytes in memory (the fuzz targets): `ply` picks the reader.
 pub(crate) fn read_bytes(bytes: &[u8], ply: bool) -> Result<Loaded, MeshError> {
     let name = Path::new(if ply { "bytes.ply" } else { "bytes.obj" });
-    let fail = |f: Fail| MeshError {
-        file: name.to_owned(),
-        where_: f.where_,
-        message: f.message,
-        out_of_memory: f.memory,
-    };
-    let mut input = Input::new(bytes, bytes.len() as u64);
+    parse(&mut Input::new(bytes, bytes.len() as u64), name, ply).map_err(|f| f.in_file(name))
+}
+
+/// The file read whole by its reader, its digest and size taken, then `finish`ed.
+fn parse<R: std::io::BufRead>(
+    input: &mut Input<R>,
+    file: &Path,
+    ply: bool,
+) -> Result<Loaded, Fail> {
     let soup = match ply {
-        true => ply::read(&mut input),
-        false => obj::read(&mut input),
-    }
-    .map_err(fail)?;
-    let (digest, size) = input.finish().map_err(fail)?;
-    let mut loaded = finish(name, soup).map_err(fail)?;
+        true => ply::read(input),
+        false => obj::read(input),
+    }?;
+    let (digest, bytes) = input.finish()?;
+    let mut loaded = finish(file, soup)?;
     loaded.mesh.digest = digest;
-    loaded.mesh.bytes = size;
+    loaded.mesh.bytes = bytes;
     Ok(loaded)
 }
 

@@ -290,6 +290,7 @@ fn property(words: &[&str], n: usize, element: Option<&mut Element>) -> Result<(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::{DVec2, DVec3};
 
     fn read_bytes(b: &[u8]) -> Result<Soup, Fail> {
         read(&mut Input::new(b, b.len() as u64))
