@@ -296,7 +296,12 @@ impl Faces {
     }
 }
 
+/// Reads past the rows of an element rayreel does not use. One without properties has no
+/// values to read, however many rows it declares (a header may claim 3e18 of them).
 pub(super) fn skip<R: BufRead>(e: &Element, body: &mut Body<R>) -> Result<(), Fail> {
+    if e.props.is_empty() {
+        return Ok(());
+    }
     for i in 0..e.count {
         body.row(&e.name, i)?;
         for p in &e.props {
