@@ -188,7 +188,7 @@ fn load(path: &Path, linear: bool) -> Result<Image, Refusal> {
             "`encoding` applies to PNG images; EXR values are linear already".into(),
         ));
     }
-    let bytes = read_regular(path)?;
+    let bytes = read_regular(path, png)?;
     Ok(Image {
         file: path.to_owned(),
         levels: decode(&bytes, png, linear, &path.display().to_string())?,
@@ -221,9 +221,11 @@ pub(crate) fn decode(
 }
 
 /// The file's bytes: a regular file only (a FIFO must not hang the load), at most
-/// `MAX_TEXTURE_BYTES`.
-fn read_regular(path: &Path) -> Result<Vec<u8>, String> {
+/// `MAX_TEXTURE_BYTES`, that starts as a PNG or an EXR file does (a sparse or foreign file is
+/// refused after 8 bytes, not read whole), read once the memory budget admits its size.
+fn read_regular(path: &Path, png: bool) -> Result<Vec<u8>, Refusal> {
     use crate::regular::{self, Links, Refused};
+    use std::io::Read;
     let shown = path.display();
     let (f, meta) = regular::open(path, Links::Follow).map_err(|e| match e {
         Refused::NotRegular(what) => {
@@ -233,13 +235,28 @@ fn read_regular(path: &Path) -> Result<Vec<u8>, String> {
         Refused::Io(e) => format!("cannot read {shown}: {e}"),
     })?;
     if meta.len() > MAX_TEXTURE_BYTES {
-        return Err(format!(
+        return Err(Refusal::File(format!(
             "{shown} is {} bytes; texture files are limited to 1 GiB",
             meta.len()
-        ));
+        )));
     }
-    regular::read_at_most(&f, meta.len(), MAX_TEXTURE_BYTES + 1)
-        .map_err(|e| format!("cannot read {shown}: {e}"))
+    let (magic, kind): (&[u8], &str) = match png {
+        true => (b"\x89PNG\r\n\x1a\n", "PNG"),
+        false => (&[0x76, 0x2f, 0x31, 0x01], "EXR"),
+    };
+    let mut start = vec![0u8; magic.len()];
+    let read = (&f).take(magic.len() as u64).read(&mut start);
+    if read.map_err(|e| format!("cannot read {shown}: {e}"))? < magic.len() || start != magic {
+        return Err(Refusal::File(format!(
+            "unreadable {kind}: {shown} does not start as a {kind} file does"
+        )));
+    }
+    let mut bytes = start;
+    crate::budget::grow(&mut bytes, meta.len() as usize, || format!("reading {shown}"))?;
+    (&f).take(MAX_TEXTURE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("cannot read {shown}: {e}"))?;
+    Ok(bytes)
 }
 
 fn check_size(width: u64, height: u64) -> Result<(u32, u32), String> {

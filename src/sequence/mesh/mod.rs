@@ -262,7 +262,7 @@ fn vertex_normals(
         .enumerate()
         .map(|(i, &v)| {
             let from_file = has_normal.as_ref().is_none_or(|h| h[i]);
-            let u = v.normalize_or_zero();
+            let u = unit(v);
             if from_file && u != DVec3::ZERO && u.is_finite() {
                 u
             } else {
@@ -344,7 +344,7 @@ fn area_weighted(p: &[DVec3], triangles: &[[u32; 3]]) -> Vec<DVec3> {
     }
     sum.into_iter()
         .map(|n| {
-            let u = n.normalize_or_zero();
+            let u = unit(n);
             if u == DVec3::ZERO || !u.is_finite() {
                 DVec3::Y
             } else {
@@ -361,6 +361,24 @@ pub(crate) fn quoted(text: &str) -> String {
         Some((at, _)) => format!("{}…", &text[..at]),
         None => text.to_string(),
     }
+}
+
+/// `normalize_or_zero` of `v` first multiplied by 2^−k, k the exponent of its largest
+/// |component|: exact, and the same as `normalize_or_zero(v)` wherever v·v neither overflows
+/// nor underflows, but a unit vector too where it would (a file normal of 1e-160 lost seven
+/// digits to the subnormal square; the fuzzer found it).
+fn unit(v: DVec3) -> DVec3 {
+    let largest = v.abs().max_element();
+    if !(largest > 0.0 && largest.is_finite()) {
+        return v.normalize_or_zero();
+    }
+    let k = libm::ilogb(largest);
+    DVec3::new(
+        libm::scalbn(v.x, -k),
+        libm::scalbn(v.y, -k),
+        libm::scalbn(v.z, -k),
+    )
+    .normalize_or_zero()
 }
 
 /// FNV-1a, 64 bits.
@@ -393,6 +411,17 @@ mod tests {
         let mut t = Vec::new();
         fan(&[0, 1, 2, 3, 4], &mut t);
         assert_eq!(t, vec![[0, 1, 2], [0, 2, 3], [0, 3, 4]]);
+    }
+
+    #[test]
+    fn tiny_and_huge_normals_come_out_unit_and_others_as_they_were() {
+        for v in [DVec3::new(1e-160, 0.0, 0.0), DVec3::new(3e-170, -4e-170, 0.0), DVec3::splat(1e300)] {
+            assert!((unit(v).length() - 1.0).abs() < 1e-15, "{v}");
+        }
+        for v in [DVec3::new(0.3, -2.0, 7.0), DVec3::new(1e-9, 1.0, 1e20), DVec3::new(5.0, 1e-170, 0.0)] {
+            assert_eq!(unit(v), v.normalize_or_zero(), "{v}");
+        }
+        assert_eq!(unit(DVec3::ZERO), DVec3::ZERO);
     }
 
     #[test]
