@@ -192,14 +192,25 @@ fn a_sparse_gigabyte_model_is_refused_at_its_first_block() {
         "material: { diffuse: [0.7, 0.5, 0.4], reflection: 0.2 }",
         "material: { diffuse: { image: sparse.png } }",
     );
-    std::fs::write(tmp.join("t.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n").unwrap();
+    std::fs::write(
+        tmp.join("t.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n",
+    )
+    .unwrap();
     std::fs::write(tmp.join("seq.yaml"), textured).unwrap();
     let started = std::time::Instant::now();
     let out = sh(&tmp, "prlimit --as=400000000 \"$RAYREEL\" check seq.yaml");
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(err.contains("sparse.png does not start as a PNG file does"), "{err}");
-    assert!(started.elapsed().as_secs_f64() < 2.0, "{:?}", started.elapsed());
+    assert!(
+        err.contains("sparse.png does not start as a PNG file does"),
+        "{err}"
+    );
+    assert!(
+        started.elapsed().as_secs_f64() < 2.0,
+        "{:?}",
+        started.elapsed()
+    );
     let (code, _, err) = check_model(&tmp, "word.obj", b"v 0 0 0\nv 1 \xe9 0\nv 0 1 0\nf 1 2 3\n");
     assert_eq!(code, Some(2));
     assert!(

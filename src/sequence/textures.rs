@@ -252,7 +252,9 @@ fn read_regular(path: &Path, png: bool) -> Result<Vec<u8>, Refusal> {
         )));
     }
     let mut bytes = start;
-    crate::budget::grow(&mut bytes, meta.len() as usize, || format!("reading {shown}"))?;
+    crate::budget::grow(&mut bytes, meta.len() as usize, || {
+        format!("reading {shown}")
+    })?;
     (&f).take(MAX_TEXTURE_BYTES + 1)
         .read_to_end(&mut bytes)
         .map_err(|e| format!("cannot read {shown}: {e}"))?;

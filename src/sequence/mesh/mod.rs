@@ -415,10 +415,18 @@ mod tests {
 
     #[test]
     fn tiny_and_huge_normals_come_out_unit_and_others_as_they_were() {
-        for v in [DVec3::new(1e-160, 0.0, 0.0), DVec3::new(3e-170, -4e-170, 0.0), DVec3::splat(1e300)] {
+        for v in [
+            DVec3::new(1e-160, 0.0, 0.0),
+            DVec3::new(3e-170, -4e-170, 0.0),
+            DVec3::splat(1e300),
+        ] {
             assert!((unit(v).length() - 1.0).abs() < 1e-15, "{v}");
         }
-        for v in [DVec3::new(0.3, -2.0, 7.0), DVec3::new(1e-9, 1.0, 1e20), DVec3::new(5.0, 1e-170, 0.0)] {
+        for v in [
+            DVec3::new(0.3, -2.0, 7.0),
+            DVec3::new(1e-9, 1.0, 1e20),
+            DVec3::new(5.0, 1e-170, 0.0),
+        ] {
             assert_eq!(unit(v), v.normalize_or_zero(), "{v}");
         }
         assert_eq!(unit(DVec3::ZERO), DVec3::ZERO);
