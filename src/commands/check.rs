@@ -16,10 +16,13 @@ pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
         .into_iter()
         .map(|w| format!("warning: {w}"))
         .collect();
-    eprint!(
-        "{}",
-        screen.lines(&warnings, warnings.len(), "", "warnings")
-    );
+    // Line by line through the crate's `eprintln!`, which survives a failing stderr.
+    for line in screen
+        .lines(&warnings, warnings.len(), "", "warnings")
+        .lines()
+    {
+        eprintln!("{line}");
+    }
     let (cost, warning) = cost(&seq, seq.timeline.frame_count);
     for w in warning.into_iter().chain(super::grain::warning(&seq)) {
         eprintln!("{w}");
