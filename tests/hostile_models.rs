@@ -267,7 +267,7 @@ fn models_in_any_units_render_the_same_pixels() {
     assert!(
         err.contains("seq.yaml:3:")
             && err.contains("objects[0].mesh.scale: ")
-            && err.contains("m-95.obj's coordinates reach 1.2e-95")
+            && err.contains("m-95.obj's coordinates reach 1.20e-95")
             && err.contains("at least 1e-100 across"),
         "{err}"
     );

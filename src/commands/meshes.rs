@@ -6,6 +6,7 @@ use crate::console::printable;
 use crate::scene::{Mesh, Scene, Shape};
 use crate::tracer::bvh::Bvh;
 use std::fmt::Write;
+use std::sync::Arc;
 
 /// Nothing for a scene without meshes; the first few mesh files and, under each, the first few
 /// placements (everything with `--full`). A hierarchy is built to be measured only where the
@@ -20,7 +21,7 @@ pub(super) fn summary(scene: &Scene, screen: Screen) -> Result<String, String> {
 }
 
 /// One mesh file's lines: its figures, skipped triangles, notes and placements.
-fn file(scene: &Scene, i: usize, m: &Mesh, screen: Screen) -> Result<String, String> {
+fn file(scene: &Scene, i: usize, m: &Arc<Mesh>, screen: Screen) -> Result<String, String> {
     crate::budget::admit(
         crate::budget::hierarchy_bytes(m.triangles.len() as u64),
         || {
@@ -51,11 +52,7 @@ fn file(scene: &Scene, i: usize, m: &Mesh, screen: Screen) -> Result<String, Str
         printable(&m.file.display().to_string()),
         m.triangles.len(),
         m.positions.len(),
-        if m.file_normals {
-            "normals from the file"
-        } else {
-            "normals averaged from the faces"
-        },
+        normals(m.file_normals, m.positions.len()),
         if m.uvs.is_some() {
             ", texture coordinates"
         } else {
@@ -131,5 +128,18 @@ fn seconds(s: f64) -> String {
         format!("{s:.2} s")
     } else {
         format!("{:.1} ms", s * 1000.0)
+    }
+}
+
+/// Where a mesh's vertex normals came from: `normals from the file`, `normals averaged from
+/// the faces`, or for a file that gives some, `normals from the file for 120 of 200
+/// vertices, averaged from the faces for the rest`.
+fn normals(from_file: usize, vertices: usize) -> String {
+    match from_file {
+        0 => "normals averaged from the faces".into(),
+        n if n == vertices => "normals from the file".into(),
+        n => format!(
+            "normals from the file for {n} of {vertices} vertices, averaged from the faces for the rest"
+        ),
     }
 }

@@ -11,7 +11,7 @@ use crate::sequence;
 /// with the reason, and then reported as the load error it is (exit 2).
 pub(super) fn preview(args: PreviewArgs) -> Result<(), Error> {
     use crate::tools::preview;
-    let (seq, problem) = sequence::load_drawable(&args.file)?;
+    let (seq, problem) = sequence::load_drawable(&args.file, &super::assets(&args.assets)?)?;
     let (first, last) = (seq.timeline.first_frame(), seq.timeline.last_frame());
     let frames: Vec<u64> = match &args.frames {
         Some(spec) => {
@@ -52,7 +52,7 @@ pub(super) fn preview(args: PreviewArgs) -> Result<(), Error> {
 }
 
 pub(super) fn measure(args: MeasureArgs) -> Result<(), Error> {
-    let mut seq = sequence::load(&args.file)?;
+    let mut seq = sequence::load_with(&args.file, &super::assets(&args.assets)?)?;
     let (first, last) = (seq.timeline.first_frame(), seq.timeline.last_frame());
     if !(first..=last).contains(&args.frame) {
         return Err(Error::Usage(format!(

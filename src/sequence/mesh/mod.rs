@@ -227,9 +227,7 @@ fn finish(file: &Path, soup: Soup) -> Result<Loaded, Fail> {
         }));
     }
     kept.shrink_to_fit();
-    let file_normals =
-        normals.is_some() && has_normal.as_ref().is_none_or(|h| h.iter().all(|&b| b));
-    let normals = vertex_normals(&positions, &kept, normals, has_normal);
+    let (normals, file_normals) = vertex_normals(&positions, &kept, normals, has_normal);
     let mesh = Mesh {
         file: file.to_owned(),
         positions,
@@ -246,30 +244,34 @@ fn finish(file: &Path, soup: Soup) -> Result<Loaded, Fail> {
     Ok(Loaded { mesh, exponent })
 }
 
-/// The file's normal where it gives a usable one (finite, non-zero: normalised), else the
-/// area-weighted normal of the faces around the vertex.
+/// The file's normal where it gives a usable one (finite, non-zero: `unit`), else the
+/// area-weighted normal of the faces around the vertex; and how many came from the file.
 fn vertex_normals(
     positions: &[DVec3],
     triangles: &[[u32; 3]],
     normals: Option<Vec<DVec3>>,
     has_normal: Option<Vec<bool>>,
-) -> Vec<DVec3> {
+) -> (Vec<DVec3>, usize) {
     let face = area_weighted(positions, triangles);
     let Some(n) = normals else {
-        return face;
+        return (face, 0);
     };
-    n.iter()
+    let mut from_file = 0;
+    let normals = n
+        .iter()
         .enumerate()
         .map(|(i, &v)| {
-            let from_file = has_normal.as_ref().is_none_or(|h| h[i]);
+            let given = has_normal.as_ref().is_none_or(|h| h[i]);
             let u = unit(v);
-            if from_file && u != DVec3::ZERO && u.is_finite() {
+            if given && u != DVec3::ZERO && u.is_finite() {
+                from_file += 1;
                 u
             } else {
                 face[i]
             }
         })
-        .collect()
+        .collect();
+    (normals, from_file)
 }
 
 /// Coordinates whose largest magnitude is in [2^−32, 2^32] are kept as they are. Others are
