@@ -34,13 +34,22 @@ pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
                 .ok()
         });
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let (cost, warning) = cost(&seq, &frames, cores, format.as_ref());
+    let (cost, warning) = cost(
+        &seq,
+        &frames,
+        cores,
+        format.as_ref(),
+        &format!("\n{INDENT}"),
+    );
     for w in warning.into_iter().chain(super::grain::warning(&seq)) {
         eprintln!("{w}");
     }
     let summary = summary(&shown(&args.file), &seq, screen).map_err(Error::Failed)?;
     out(&format!("{summary}  cost:       {cost}\n"))
 }
+
+/// Where a summary's continuation lines start (under the values after `  objects:    `).
+const INDENT: &str = "              ";
 
 /// Jobs measured to take longer than this are worth a warning before they start.
 const LONG_JOB_SECONDS: f64 = 24.0 * 3600.0;
@@ -84,12 +93,13 @@ fn surfaces_per_sample(seq: &Sequence) -> f64 {
 /// `about 9.2 min for 240 frames (measured: …); at most 3.98e11 rays (…)`, or `nothing to
 /// render`, and a warning for a job of more than a day: what `frames` of `seq` take on
 /// `threads` threads written as `format`, from a short probe (`estimate`), beside the ray
-/// count's upper bound.
+/// count's upper bound, after `join` (`check` starts it on a line of its own).
 pub(crate) fn cost(
     seq: &Sequence,
     frames: &FrameSet,
     threads: usize,
     format: Option<&FileFormat>,
+    join: &str,
 ) -> (String, Option<String>) {
     let n = frames.len();
     if n == 0 {
@@ -115,7 +125,7 @@ pub(crate) fn cost(
         true => format!("at least {}", estimate::duration(e.seconds)),
         false => format!("about {}", estimate::duration(e.seconds)),
     };
-    let line = format!("{about} for {frames_text} ({}); {bound}", e.basis);
+    let line = format!("{about} for {frames_text} ({});{join}{bound}", e.basis);
     let warning = (e.seconds > LONG_JOB_SECONDS).then(|| {
         format!(
             "warning: this job may take {about} on this machine ({}); check the size, render.samples and render.max_depth (Ctrl-C or SIGTERM stops a render within about a second)",

@@ -48,7 +48,7 @@ fn file(scene: &Scene, i: usize, m: &Arc<Mesh>, screen: Screen) -> Result<String
         .collect();
     let _ = write!(
         out,
-        "  mesh:       {}: {} triangles, {} vertices ({}{}), {} read in {}; memory {} + hierarchy {} built in {}; {} placement{}",
+        "  mesh:       {}: {} triangles, {} vertices ({}{}); {} placement{}\n              {} read in {}; memory {} + hierarchy {} built in {}",
         printable(&m.file.display().to_string()),
         m.triangles.len(),
         m.positions.len(),
@@ -58,13 +58,13 @@ fn file(scene: &Scene, i: usize, m: &Arc<Mesh>, screen: Screen) -> Result<String
         } else {
             ""
         },
+        placements.len(),
+        if placements.len() == 1 { "" } else { "s" },
         bytes(m.bytes as usize),
         seconds(m.load_seconds),
         bytes(data),
         bytes(bvh.bytes()),
         seconds(built),
-        placements.len(),
-        if placements.len() == 1 { "" } else { "s" },
     );
     if m.skipped > 0 {
         let _ = write!(

@@ -103,13 +103,15 @@ pub fn load(file: &Path) -> Result<Loaded, MeshError> {
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    let mut loaded = match ext.as_str() {
-        "obj" | "ply" => open(file).and_then(|mut input| parse(&mut input, file, ext == "ply")),
-        _ => Err(Fail::whole(
-            "unknown mesh format: the file name must end in .obj or .ply",
-        )),
-    }
-    .map_err(|f| f.in_file(file))?;
+    // Opened first: a directory or FIFO named like a model is refused for what it is.
+    let mut loaded = open(file)
+        .and_then(|mut input| match ext.as_str() {
+            "obj" | "ply" => parse(&mut input, file, ext == "ply"),
+            _ => Err(Fail::whole(
+                "unknown mesh format: the file name must end in .obj or .ply",
+            )),
+        })
+        .map_err(|f| f.in_file(file))?;
     loaded.mesh.load_seconds = started.elapsed().as_secs_f64();
     Ok(loaded)
 }
