@@ -259,10 +259,9 @@ fn too_small(mesh: &Mesh, k: i32, scale: DVec3) -> String {
     let (lo, hi) = mesh.bounds();
     let reach = libm::scalbn(lo.abs().max(hi.abs()).max_element(), k);
     format!(
-        "{}'s coordinates reach {}, so this scale makes the placed model about {} across; it must be at least {MIN_SCALE:e} across, as f64 cannot trace a smaller one among coordinates up to ±{MAX_MAGNITUDE:e} {}",
+        "{}'s coordinates reach {reach:.2e}, so this scale makes the placed model about {:.2e} across; it must be at least {MIN_SCALE:e} across, as f64 cannot trace a smaller one among coordinates up to ±{MAX_MAGNITUDE:e} {}",
         mesh.file.display(),
-        format!("{reach:.2e}"),
-        format!("{:.2e}", reach * scale.abs().min_element()),
+        reach * scale.abs().min_element(),
         got(num3(scale))
     )
 }
