@@ -250,50 +250,15 @@ fn things_hold_before_their_first_key_and_after_their_last() {
 #[test]
 fn motion_blur_is_the_same_on_any_thread_count() {
     let tmp = setup("motion-blur", &animated(", shutter: 270, samples: 6"));
-    ok(
-        &tmp,
-        &[
-            "render",
-            "seq.yaml",
-            "--frames",
-            "11",
-            "-j",
-            "1",
-            "-o",
-            "one/f_####.png",
-            "-q",
-        ],
-    );
-    ok(
-        &tmp,
-        &[
-            "render",
-            "seq.yaml",
-            "--frames",
-            "11",
-            "-j",
-            "2",
-            "-o",
-            "two/f_####.png",
-            "-q",
-        ],
-    );
-    ok(
-        &tmp,
-        &[
-            "render",
-            "seq.yaml",
-            "--frames",
-            "11",
-            "-j",
-            "3",
-            "-o",
-            "three/f_####.png",
-            "-q",
-        ],
-    );
-    assert_same_files(&tmp.join("one"), &tmp.join("two"));
-    assert_same_files(&tmp.join("one"), &tmp.join("three"));
+    for threads in ["1", "2", "3"] {
+        let out = format!("j{threads}/f_####.png");
+        let args = [
+            "render", "seq.yaml", "--frames", "11", "-j", threads, "-o", &out, "-q",
+        ];
+        ok(&tmp, &args);
+    }
+    assert_same_files(&tmp.join("j1"), &tmp.join("j2"));
+    assert_same_files(&tmp.join("j1"), &tmp.join("j3"));
     // The blur is there: the frame differs from the same frame with the shutter closed.
     let sharp = animated(", samples: 6");
     std::fs::write(tmp.join("sharp.yaml"), sharp).unwrap();
@@ -309,7 +274,7 @@ fn motion_blur_is_the_same_on_any_thread_count() {
             "-q",
         ],
     );
-    assert!(read_png(&tmp.join("one/f_0011.png")) != read_png(&tmp.join("sharp/f_0011.png")));
+    assert!(read_png(&tmp.join("j1/f_0011.png")) != read_png(&tmp.join("sharp/f_0011.png")));
 }
 
 /// `rayreel status` lines: (state, frames), e.g. ("up to date", "0-12").
@@ -448,4 +413,16 @@ fn bad_keys_are_refused_with_file_line_and_field() {
         line_of("direction: [1, -1, -1]"),
         "lights[2].keys[1].direction",
     );
+}
+
+#[test]
+fn check_lists_what_moves_and_over_which_frames() {
+    let tmp = setup("motion-check", &animated(""));
+    let out = ok(&tmp, &["check", "seq.yaml"]);
+    let line = "  moving:     objects[0] (point, normal) frames 0-24; objects[1] (scale, rotate, translate) frames 0-24; objects[2] (center, radius) frames 0-24; lights[0] (position, diffuse) frames 0-24, and 2 more\n";
+    assert!(out.contains(line), "{out}");
+    // A scene without keys says nothing of it.
+    let still = std::fs::read_to_string(repo().join("sequences/talk.yaml")).unwrap();
+    std::fs::write(tmp.join("still.yaml"), still).unwrap();
+    assert!(!ok(&tmp, &["check", "still.yaml"]).contains("moving:"));
 }

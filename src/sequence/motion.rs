@@ -2,7 +2,7 @@
 //! field it sets is checked in a still scene, and the keys together so that every pose
 //! between them is one too: a scale keeps its sign, a direction never turns through zero.
 
-use super::timeline::{Frames, ease, key_time};
+use super::timeline::{Frames, ease, increasing, key_time};
 use super::*;
 use crate::timeline::Interpolation;
 use crate::timeline::motion::{Field, MeshFrame, Posed, Rig, RigKey, Thing};
@@ -223,19 +223,13 @@ fn rig_keys(path: &str, kind: &Kind, keys: &[raw::ThingKey], frames: Frames) -> 
     for (i, k) in keys.iter().enumerate() {
         let kp = format!("{path}.keys[{i}]");
         let (time, field) = key_time(&kp, (k.time, k.frame), frames)?;
-        if let Some(prev) = out.last()
-            && time <= prev.time
-        {
-            return invalid(
-                format!("{kp}.{field}"),
-                format!(
-                    "key times must increase strictly; key {} is at {} {}",
-                    i - 1,
-                    num(prev.time),
-                    got_num(time)
-                ),
-            );
-        }
+        increasing(
+            &format!("{kp}.{field}"),
+            "key",
+            i,
+            out.last().map(|k| k.time),
+            time,
+        )?;
         let mut values = match out.last() {
             Some(prev) => prev.values.clone(),
             None => keyed.clone(),

@@ -261,19 +261,13 @@ fn keyframes(keys: &[raw::Keyframe], camera: Option<Key>, frames: Frames) -> Che
     for (i, k) in keys.iter().enumerate() {
         let path = format!("timeline.keyframes[{i}]");
         let (time, field) = key_time(&path, (k.time, k.frame), frames)?;
-        if let Some(prev) = out.last()
-            && time <= prev.time
-        {
-            return invalid(
-                format!("{path}.{field}"),
-                format!(
-                    "keyframe times must increase strictly; keyframe {} is at {} {}",
-                    i - 1,
-                    num(prev.time),
-                    got_num(time)
-                ),
-            );
-        }
+        increasing(
+            &format!("{path}.{field}"),
+            "keyframe",
+            i,
+            out.last().map(|k| k.time),
+            time,
+        )?;
         let before = out.last().copied().or(camera);
         let pose = key_pose(&path, k, before.map(|b| b.pose))?;
         let ease = ease(&path, i, keys.len(), k.ease.as_deref())?;
@@ -362,6 +356,28 @@ fn key_pose(path: &str, k: &raw::Keyframe, before: Option<Pose>) -> Check<Pose> 
             None => before.map_or(90.0, |p| p.fov),
         },
     })
+}
+
+/// Key `i` of a list (a `noun`) at `time` comes strictly after the one before, at `before`.
+pub(super) fn increasing(
+    path: &str,
+    noun: &str,
+    i: usize,
+    before: Option<f64>,
+    time: f64,
+) -> Check<()> {
+    match before {
+        Some(prev) if time <= prev => invalid(
+            path,
+            format!(
+                "{noun} times must increase strictly; {noun} {} is at {} {}",
+                i - 1,
+                num(prev),
+                got_num(time)
+            ),
+        ),
+        _ => Ok(()),
+    }
 }
 
 /// `stop` or `pass`; the per-segment eases of earlier versions are refused with what to write.

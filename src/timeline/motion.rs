@@ -39,6 +39,27 @@ pub enum Field {
 }
 
 impl Field {
+    /// The key field's name (both spot angles as `angles`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Field::Scale => "scale",
+            Field::Rotate => "rotate",
+            Field::Translate => "translate",
+            Field::Center => "center",
+            Field::Radius => "radius",
+            Field::Point => "point",
+            Field::Normal => "normal",
+            Field::Position => "position",
+            Field::Direction => "direction",
+            Field::Angles => "angles",
+            Field::Ambient => "ambient",
+            Field::Diffuse => "diffuse",
+            Field::Specular => "specular",
+            Field::Color => "color",
+            Field::Corner => "corner",
+        }
+    }
+
     /// Whether the track follows a curve under smooth interpolation: places and turns do;
     /// sizes, directions, angles and colours go straight, so they never overshoot their keys.
     pub(crate) fn curved(self) -> bool {
