@@ -42,6 +42,7 @@ pub struct Render {
     pub shutter_offset: Option<f64>,
     pub precision: Option<crate::settings::Precision>,
     pub aov: Option<Vec<crate::settings::Aov>>,
+    pub denoise: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]
