@@ -6,6 +6,7 @@
 //! cargo run --release --example gen_mesh -- [--obj] terrain N OUT.ply    N×N heightfield
 //! cargo run --release --example gen_mesh -- [--obj] blob K OUT.ply       displaced icosphere
 //! cargo run --release --example gen_mesh -- [--obj] bunnyish [K] OUT.ply blob, K = 71 by default
+//! cargo run --release --example gen_mesh -- [--obj] vase N OUT.ply       a z-up "scan", 50 tall
 //! ```
 //!
 //! - `sphere N` (N ≥ 2): the unit sphere about the origin, N latitude bands × 2N longitude
@@ -21,6 +22,9 @@
 //!   triangles; K = 71 gives 100,820), projected to the unit sphere, displaced radially by
 //!   a sum of sin products and stretched to a lumpy, bunny-sized stand-in for a scanned model
 //!   (closed, star-shaped, never self-intersecting), with area-weighted vertex normals.
+//! - `vase N` (N ≥ 3): a vase turned about the z axis with a spout towards +x, 4N² + 2N
+//!   triangles, written as a scan often comes: z up, 50 units tall, standing on z = 10 at
+//!   (120, −40), for `up: z`, `fit` and `origin` to place (sequences/model.yaml).
 //!
 //! Output is binary little-endian PLY (`float x y z [nx ny nz] [u v]`, `face` with
 //! `list uchar int vertex_indices`, triangles wound counter-clockwise seen from outside/above),
@@ -129,6 +133,17 @@ fn vertex_normals(pos: &[[f64; 3]], tris: &[[u32; 3]]) -> Vec<[f64; 3]> {
         }
     }
     n.into_iter().map(normalize).collect()
+}
+
+/// A mesh of `pos` and `tris` with area-weighted vertex normals and no uv.
+fn with_normals(pos: Vec<[f64; 3]>, tris: Vec<[u32; 3]>) -> Mesh {
+    let normals = vertex_normals(&pos, &tris);
+    Mesh {
+        pos,
+        normals: Some(normals),
+        uv: None,
+        tris,
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -356,13 +371,54 @@ fn blob(k: usize) -> Mesh {
             }
         }
     }
-    let normals = vertex_normals(&pos, &tris);
-    Mesh {
-        pos,
-        normals: Some(normals),
-        uv: None,
-        tris,
+    with_normals(pos, tris)
+}
+
+/// A vase turned about the z axis, as a scan would come: z up, 50 units tall, standing on
+/// z = 10 at (120, −40), its profile r(t) = 5.5 + 8·sin(πt/0.85) (0 above t = 0.85) +
+/// 3·max(0, (t − 0.8)/0.2)² − 1.5t over t ∈ [0, 1] from foot to lip, `n` segments around
+/// and 2n rings, its foot and lip closed by
+/// fans to points on the axis; a spout on one side (+x, bulging the rings there) shows which
+/// way it faces.
+fn vase(n: usize) -> Mesh {
+    let rings = 2 * n;
+    let (cx, cy, z0, height) = (120.0, -40.0, 10.0, 50.0);
+    let mut pos = Vec::with_capacity((rings + 1) * n + 2);
+    for i in 0..=rings {
+        let t = i as f64 / rings as f64;
+        // A foot, a belly, a narrow neck and a flared lip.
+        let belly = if t < 0.85 {
+            sin(std::f64::consts::PI * t / 0.85)
+        } else {
+            0.0
+        };
+        let lip = ((t - 0.8) / 0.2).max(0.0);
+        let r = 5.5 + 8.0 * belly + 3.0 * lip * lip - 1.5 * t;
+        for j in 0..n {
+            let a = std::f64::consts::TAU * j as f64 / n as f64;
+            let (s, c) = sin_cos(a);
+            // The spout: the upper rings reach out towards +x.
+            let spout = 5.0 * t * t * t * t * c.max(0.0).powi(6);
+            pos.push([cx + (r + spout) * c, cy + (r + spout) * s, z0 + height * t]);
+        }
     }
+    pos.push([cx, cy, z0]);
+    pos.push([cx, cy, z0 + height]);
+    let (foot, lip) = ((pos.len() - 2) as u32, (pos.len() - 1) as u32);
+    let at = |i: usize, j: usize| (i * n + j % n) as u32;
+    let mut tris = Vec::with_capacity(2 * rings * n + 2 * n);
+    for i in 0..rings {
+        for j in 0..n {
+            let (a, b, c, d) = (at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i + 1, j));
+            tris.push([a, b, c]);
+            tris.push([a, c, d]);
+        }
+    }
+    for j in 0..n {
+        tris.push([foot, at(0, j + 1), at(0, j)]);
+        tris.push([lip, at(rings, j), at(rings, j + 1)]);
+    }
+    with_normals(pos, tris)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -450,7 +506,7 @@ fn write_obj(m: &Mesh, out: &mut impl Write, comment: &str) -> std::io::Result<(
 
 // ---------------------------------------------------------------------------------------
 
-const USAGE: &str = "usage: gen_mesh [--obj] sphere N OUT | terrain N OUT | blob K OUT | bunnyish [K] OUT\n\
+const USAGE: &str = "usage: gen_mesh [--obj] sphere N OUT | terrain N OUT | blob K OUT | bunnyish [K] OUT | vase N OUT\n\
                      (OUT ending in .obj, or --obj, writes Wavefront OBJ; else binary PLY)";
 
 fn parse_count(s: &str, what: &str, lo: usize, hi: usize) -> Result<usize, String> {
@@ -489,6 +545,10 @@ fn run() -> Result<(), String> {
             (blob(k), &args[2], format!("rayreel gen_mesh blob {k}"))
         }
         ("bunnyish", 2) => (blob(71), &args[1], "rayreel gen_mesh blob 71".to_string()),
+        ("vase", 3) => {
+            let n = parse_count(&args[1], "N", 3, 10_000)?;
+            (vase(n), &args[2], format!("rayreel gen_mesh vase {n}"))
+        }
         _ => return Err(USAGE.to_string()),
     };
     let obj = obj_flag || out.to_ascii_lowercase().ends_with(".obj");

@@ -4,7 +4,8 @@
 //! Where the fingerprint differs, the settings records say what differs: a frame whose
 //! difference is only of quality is kept unless the job raises every quality setting (or
 //! `--force`), since a rerun without the original flags must not replace a finished frame
-//! with a worse one; `--skip-existing` keeps every complete frame of the job's size.
+//! with a worse one, and so is one whose difference is its size (and quality); `--skip-existing`
+//! keeps every complete frame of the job's size.
 //!
 //! The directory is listed once: a selected frame whose name is not in it is missing without a
 //! look of its own, so a plan costs the selection's runs plus the files that exist, and each
@@ -170,7 +171,14 @@ fn judge((has_record, difference): (bool, Difference), complete: bool, resume: R
                 "made with other quality settings ({what}); {again}"
             ));
         }
-        Difference::Quality { what, .. } | Difference::Content(what) => what,
+        Difference::Resized(what) if resume != Resume::Force => {
+            return State::Kept(format!(
+                "made at another size ({what}); a finished frame is not replaced by one of another size: --force replaces them, or write them elsewhere with -o"
+            ));
+        }
+        Difference::Quality { what, .. }
+        | Difference::Resized(what)
+        | Difference::Content(what) => what,
     };
     match complete && resume == Resume::SkipExisting {
         true => State::Kept(format!("by --skip-existing ({what})")),

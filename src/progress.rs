@@ -23,6 +23,8 @@ pub(crate) struct Progress {
     half_overflow_told: Cell<bool>,
     /// Where streamed frames go, as frame lines say it: `to stdout`, or `to ffmpeg` (--video).
     pub(crate) stream_to: &'static str,
+    /// What the closing line says was done with the frames: `rendered`, or `encoded`.
+    pub(crate) verb: &'static str,
     start: Instant,
 }
 
@@ -48,6 +50,7 @@ impl Progress {
             sequence_frames,
             done: 0,
             stream_to: "to stdout",
+            verb: "rendered",
             skipped: Cell::new(0),
             failed: Cell::new(0),
             half_overflow_told: Cell::new(false),
@@ -283,7 +286,8 @@ impl Progress {
         }
         if self.total > 0 {
             eprintln!(
-                "rendered {} frame{} in {wall:.2} s ({rate:.2} frames/s)",
+                "{} {} frame{} in {wall:.2} s ({rate:.2} frames/s)",
+                self.verb,
                 self.done,
                 if self.done == 1 { "" } else { "s" }
             );

@@ -191,8 +191,8 @@ pub struct Mesh {
     pub uvs: Option<Vec<DVec2>>,
     /// Vertex indices of each triangle, in the file's order after fanning polygons.
     pub triangles: Vec<[u32; 3]>,
-    /// Whether `normals` came from the file.
-    pub file_normals: bool,
+    /// How many of `normals` came from the file (the rest are averaged from the faces).
+    pub file_normals: usize,
     /// Triangles dropped as degenerate (zero area, a repeated index, a non-finite vertex).
     pub skipped: usize,
     /// Notes for `check` (e.g. materials the file names and rayreel ignores).
@@ -282,7 +282,30 @@ pub struct Scene {
     pub meshes: Vec<Arc<Mesh>>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    /// What rays that miss see: this colour, or the sky when there is one (then this is the
+    /// colour that stands for it where one must, its mean or horizon).
     pub background: DVec3,
+    /// A sky in place of the flat background (docs/spec/texture.md#the-sky).
+    pub sky: Option<Sky>,
+}
+
+/// `render.background` as a sky: what a ray that leaves the scene in direction d sees.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Sky {
+    /// An equirectangular image (u along the horizon from −z, v from the nadir to the
+    /// zenith), turned `rotate` degrees about +y, times `intensity`; filtered by the ray's
+    /// footprint over the image's mip pyramid.
+    Image {
+        image: Arc<Image>,
+        rotate: f64,
+        intensity: f64,
+    },
+    /// Blends from `horizon` to `zenith` (upwards) or `ground` (downwards) by |d.y|/|d|.
+    Gradient {
+        zenith: DVec3,
+        horizon: DVec3,
+        ground: DVec3,
+    },
 }
 
 impl Scene {

@@ -5,6 +5,8 @@
 //! timelines are sampled (every frame up to `MAX_SAMPLED_FRAMES`, fewer in scenes of many
 //! objects).
 
+use crate::camera::Camera;
+use crate::console::printable;
 use crate::frameset::evenly_spaced;
 use crate::scene::Shape;
 use crate::sequence::Sequence;
@@ -21,8 +23,91 @@ pub(crate) const MAX_SAMPLED_FRAMES: u64 = 100_000;
 pub(crate) fn for_sequence(seq: &Sequence) -> Vec<String> {
     let mut all = seq.warnings.clone();
     all.extend(inside_warnings(seq));
+    all.extend(framing_warnings(seq));
     all.extend(precision_warnings(seq));
     all
+}
+
+/// Frames the framing checks look at, evenly spaced: a model seen at all is seen on many.
+const FRAMING_FRAMES: u64 = 2000;
+
+/// For each mesh: `the camera starts inside the bounds of objects[2] (statue, models/venus.ply,
+/// 52.3 units across): …` when the first frame's camera is inside its placed box, and
+/// `objects[2] (…) is never in view: …` when no frame's view (sampled, at most 2000) reaches
+/// its box. A model scaled so the camera sits inside it, or placed where the camera never
+/// looks, is the usual first mistake with an imported model.
+pub(crate) fn framing_warnings(seq: &Sequence) -> Vec<String> {
+    let t = &seq.timeline;
+    let frames: Vec<u64> = evenly_spaced(t.frame_count, FRAMING_FRAMES)
+        .into_iter()
+        .map(|f| f + t.first_frame())
+        .collect();
+    let cameras: Vec<Camera> = frames
+        .iter()
+        .filter_map(|&n| Camera::new(&t.pose_of(n)).ok())
+        .collect();
+    let aspect = f64::from(seq.settings.height) / f64::from(seq.settings.width);
+    let start = t.pose_of(t.first_frame()).position;
+    let mut out = Vec::new();
+    for (i, o) in seq.scene.objects.iter().enumerate() {
+        let Shape::Mesh { mesh, place, .. } = o.shape else {
+            continue;
+        };
+        let (lo, hi) = seq.scene.mesh_bounds(mesh, &place);
+        let across = (hi - lo).max_element();
+        let what = format!(
+            "objects[{i}] ({}{}, {} units across)",
+            seq.object_names[i]
+                .as_deref()
+                .map(|n| format!("{}, ", printable(n)))
+                .unwrap_or_default(),
+            printable(&seq.scene.meshes[mesh].file.display().to_string()),
+            crate::console::num(round3(across))
+        );
+        if start.cmpge(lo).all() && start.cmple(hi).all() {
+            out.push(format!(
+                "the camera starts inside the bounds of {what}: is the model scaled for this scene? (`fit:` gives its size in scene units)"
+            ));
+        }
+        if !cameras.iter().any(|c| may_see(c, aspect, lo, hi)) {
+            out.push(format!(
+                "{what} is never in view: no frame's camera looks towards its bounds; aim a key at it with `look_at: {{ object: NAME }}` or check its translate"
+            ));
+        }
+    }
+    out
+}
+
+/// `v` to 3 significant digits, for sizes in messages.
+fn round3(v: f64) -> f64 {
+    if !(v.is_finite() && v > 0.0) {
+        return v;
+    }
+    let scale = 10f64.powi(2 - v.log10().floor() as i32);
+    (v * scale).round() / scale
+}
+
+/// Whether the box [lo, hi] may show in the view of `camera` (horizontal half-angle tangent
+/// `tan_half_fov`, vertical times `aspect` = height / width): false only when all eight
+/// corners lie outside one of the view's four side planes, or behind the camera.
+fn may_see(camera: &Camera, aspect: f64, lo: DVec3, hi: DVec3) -> bool {
+    let (tx, ty) = (camera.tan_half_fov, camera.tan_half_fov * aspect);
+    let corners = (0..8).map(|k| {
+        let c = DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        );
+        let d = c - camera.origin;
+        (d.dot(camera.right), d.dot(camera.up), d.dot(camera.forward))
+    });
+    let corners: Vec<(f64, f64, f64)> = corners.collect();
+    let all = |f: &dyn Fn(&(f64, f64, f64)) -> bool| corners.iter().all(f);
+    !(all(&|c| c.2 <= 0.0)
+        || all(&|c| c.0 > tx * c.2)
+        || all(&|c| c.0 < -tx * c.2)
+        || all(&|c| c.1 > ty * c.2)
+        || all(&|c| c.1 < -ty * c.2))
 }
 
 /// Distance tests `inside_warnings` may spend: the frames it samples shrink as objects grow.

@@ -248,7 +248,7 @@ fn check_lists_area_lights_and_notes_a_noisy_penumbra() {
     // 640×360 pixels × 4 samples × (1 + 16 + 16) × max_depth 3.
     let rays = 640.0 * 360.0 * 4.0 * 33.0 * 3.0;
     assert!(
-        text.contains(&format!("up to {rays:.2e} rays a frame")),
+        text.contains(&format!("at most {rays:.2e} rays (an upper bound")),
         "{text}"
     );
     let few = std::fs::read_to_string(&soft)

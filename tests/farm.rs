@@ -116,6 +116,8 @@ fn claiming_processes_survive_one_being_killed() {
             "clean/f_####.png",
             "--size",
             "640x360",
+            // The setup's clean frames are of the file's size: only --force replaces them.
+            "--force",
             "-q",
         ],
     );
@@ -227,7 +229,7 @@ fn status_lists_every_state_as_compact_specs() {
         text.contains("corrupt     3") && text.contains("foreign     30"),
         "{text}"
     );
-    // The same override flags as render: another size makes everything stale.
+    // The same override flags as render: frames of another size are kept, never replaced.
     let other = run_in(
         &tmp,
         &[
@@ -241,5 +243,5 @@ fn status_lists_every_state_as_compact_specs() {
             "0-2",
         ],
     );
-    assert!(String::from_utf8_lossy(&other.stdout).contains("3 frames: 3 stale"));
+    assert!(String::from_utf8_lossy(&other.stdout).contains("3 frames: 3 kept"));
 }

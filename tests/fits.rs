@@ -316,7 +316,7 @@ fn messages_count_round_and_read_the_file() {
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(text.contains("(2 spheres, 1 plane)"), "{text}");
     assert!(text.contains("(1 turn)"), "{text}");
-    assert!(text.contains("19 at 7.5 fps (2.5 s)"), "{text}");
+    assert!(text.contains("19 at 7.5 fps (2.53 s)"), "{text}");
     // `-` reads the sequence from stdin.
     let mut child = bin()
         .args(["check", "-"])
@@ -358,7 +358,7 @@ fn studio_frame_numbers_and_fractional_rates() {
     let out = run_in(&tmp, &["check", "seq.yaml"]);
     let summary = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(
-        summary.contains("25 at 24000/1001 fps (1.001 s, frames 1001-1025)"),
+        summary.contains("25 at 24000/1001 fps (1.04 s, frames 1001-1025)"),
         "{summary}"
     );
     let out = run_in(&tmp, &["camera", "seq.yaml"]);

@@ -465,6 +465,14 @@ timeline:
     std::fs::write(tmp.join("seq.yaml"), blurred).unwrap();
     let blur = ["--size", "81x45", "--samples", "3", "--frames", "5"];
     every_kernel_equals_scalar(&tmp, "texture-blur", &blur);
+    // Under an image sky (the globe, turned), seen directly, in the mirror and through glass.
+    let sky = seq.replace(
+        "render: { max_depth: 5 }",
+        "render: { max_depth: 5, background: { image: textures/globe.png, rotate: 20 } }",
+    );
+    std::fs::write(tmp.join("seq.yaml"), sky).unwrap();
+    let args = ["--size", "65x37", "--samples", "2", "--frames", "3"];
+    every_kernel_equals_scalar(&tmp, "texture-sky", &args);
 }
 
 /// Motion blur and depth of field give each lane its own camera, instant and lens point.

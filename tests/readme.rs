@@ -474,8 +474,14 @@ fn sequence_files_shown_load() {
         let (blocks, _) = split(&read(&page));
         for block in blocks.iter().filter(|b| b.info == "yaml") {
             let text = block.lines.join("\n") + "\n";
-            // Whole files only: fragments (a timeline, a material) cannot load alone.
-            let whole = text.contains("objects:")
+            // Whole files only: fragments (a timeline, a material, a block that says it is an
+            // excerpt) cannot load alone.
+            let excerpt = block
+                .lines
+                .first()
+                .is_some_and(|l| l.starts_with("# excerpt"));
+            let whole = !excerpt
+                && text.contains("objects:")
                 && (text.contains("camera:") || text.contains("timeline:"));
             if !whole {
                 continue;

@@ -141,12 +141,12 @@ fn editing_a_keyframe_rerenders_exactly_the_frames_it_moves() {
         !log.contains("frame 24 written") && !log.contains("frame 3 written"),
         "{log}"
     );
-    // A different resolution re-renders everything.
+    // A different resolution never replaces finished frames unforced.
     let dry = run_in(
         &tmp,
         &["render", "seq.yaml", "--size", "80x45", "--dry-run"],
     );
-    assert!(String::from_utf8_lossy(&dry.stdout).contains("49 frames: 49 stale → rendering 49"));
+    assert!(String::from_utf8_lossy(&dry.stdout).contains("49 frames: 49 kept → rendering 0"));
 }
 
 #[test]
@@ -330,13 +330,17 @@ fn a_rerun_at_lower_quality_keeps_the_frames_and_says_what_differs() {
         &["stale 0-5: samples: 16 → 4, exposure: 0 → 1"],
     );
     let smaller = format!("status {job} --samples 16 --max-depth 4").replace("64x36", "32x18");
-    says(&tmp, &smaller, 1, &["stale 0-5: size: 64x36 → 32x18"]);
+    // A finished frame of another size is kept too: only --force replaces it.
+    let resized = "kept 0-5 made at another size (size: 64x36 → 32x18); a finished frame is not replaced by one of another size: --force replaces them, or write them elsewhere with -o";
+    says(&tmp, &smaller, 0, &["6 frames: 6 kept", resized]);
+    let forced = format!("render {job} --force --dry-run").replace("64x36", "32x18");
+    says(&tmp, &forced, 0, &["6 stale → rendering 6 (--force)"]);
     let redder = seq().replace("[0.7, 0, 0]", "[0.6, 0, 0]");
     std::fs::write(tmp.join("seq.yaml"), redder).unwrap();
     let same = format!("status {job} --samples 16 --max-depth 4");
-    says(&tmp, &same, 1, &["stale 0-5: materials.red"]);
+    says(&tmp, &same, 1, &["stale 0-5: materials.red (diffuse)"]);
     // --skip-existing trusts any complete frame of the job's size.
-    let why = "kept 0-5 by --skip-existing (samples: 16 → 4, materials.red)";
+    let why = "kept 0-5 by --skip-existing (samples: 16 → 4, materials.red (diffuse))";
     let args = format!("render {lower} --skip-existing");
     says(&tmp, &args, 0, &["6 kept → rendering 0", why]);
     assert_eq!(frame_bytes(&tmp.join("out")), finished);

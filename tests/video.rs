@@ -202,7 +202,7 @@ fn video_names_its_containers_and_keeps_apart_from_pipes() {
     assert!(out.status.success(), "{}", stderr(&out));
     let plan = String::from_utf8_lossy(&out.stdout);
     assert!(
-        plan.contains("would render frames 0-23 into v.mp4"),
+        plan.contains("would render frames 0-23 straight into v.mp4"),
         "{plan}"
     );
     let err = stderr(&out);

@@ -8,7 +8,7 @@
 set -eu
 root=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$root"
-cargo build --quiet --release
+[ -n "${RAYREEL:-}" ] || cargo build --quiet --release
 dir=target/meshes
 scene() { # name file eye look fov light precision
     cat > "$dir/$1-$7.yaml" <<YAML
@@ -32,7 +32,7 @@ for p in f32 f64; do
 done
 for name in blob terrain; do
     for p in f32 f64; do
-        out=$(/usr/bin/time -f "%e %U %S" target/release/rayreel render "$dir/$name-$p.yaml" \
+        out=$(/usr/bin/time -f "%e %U %S" ${RAYREEL:-target/release/rayreel} render "$dir/$name-$p.yaml" \
             --pipe raw --quiet --frames 0-23 "$@" 2>&1 >/dev/null | tail -1)
         echo "$name $p" "$out" | awk '{ printf "%s %s: %.1f ms wall, %.1f ms CPU a frame (24 frames, load and hierarchy included)\n", $1, $2, 1000*$3/24, 1000*($4+$5)/24 }'
     done

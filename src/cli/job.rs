@@ -43,7 +43,8 @@ impl Job {
     }
 
     fn load(args: &JobArgs, every_shard: bool) -> Result<Job, JobError> {
-        let mut seq = sequence::load(&args.file)?;
+        let assets = super::asset_folders(&args.assets).map_err(JobError::Usage)?;
+        let mut seq = sequence::load_with(&args.file, &assets)?;
         apply(&mut seq, args)?;
         let frames = frames(&seq, args, every_shard)?;
         Ok(Job {
@@ -158,6 +159,9 @@ fn apply(seq: &mut Sequence, o: &JobArgs) -> Result<(), JobError> {
     if let Some(out) = &o.output {
         seq.output = out.clone();
     }
+    if draft {
+        seq.output = draft_output(&seq.output);
+    }
     seq.settings.depth |= o.depth;
     seq.settings.alpha |= o.alpha;
     seq.settings.aov = seq.settings.aov.union(Aovs::of(&o.aov));
@@ -177,6 +181,16 @@ fn apply(seq: &mut Sequence, o: &JobArgs) -> Result<(), JobError> {
     output_pattern(&seq.output, seq.timeline.last_frame())
         .map_err(|m| JobError::Usage(format!("--output: {m}")))?;
     Ok(())
+}
+
+/// Where draft frames go: a `draft/` folder beside the output's file name
+/// (`frames/orbit/frame_####.png` → `frames/orbit/draft/frame_####.png`), so a draft, made
+/// at half the size and one sample, never meets the finished frames.
+pub(crate) fn draft_output(output: &str) -> String {
+    match output.rfind('/') {
+        Some(i) => format!("{}/draft/{}", &output[..i], &output[i + 1..]),
+        None => format!("draft/{output}"),
+    }
 }
 
 /// This task's frames: the spec's (default all), then the shard's share (`every_shard`: all

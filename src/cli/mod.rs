@@ -67,12 +67,22 @@ pub enum Command {
 pub struct CheckArgs {
     /// The sequence file (YAML; `-` reads standard input).
     pub(crate) file: PathBuf,
+    /// A model library: a folder where mesh and image files the sequence names are also
+    /// looked for, after the sequence file's folder (repeatable; RAYREEL_ASSETS adds more,
+    /// separated by `:`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) assets: Vec<PathBuf>,
 }
 
 #[derive(Debug, Args)]
 pub struct CameraArgs {
     /// The sequence file (YAML; `-` reads standard input).
     pub(crate) file: PathBuf,
+    /// A model library: a folder where mesh and image files the sequence names are also
+    /// looked for, after the sequence file's folder (repeatable; RAYREEL_ASSETS adds more,
+    /// separated by `:`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) assets: Vec<PathBuf>,
     /// `csv` (a header line, then one line per frame) or `json` (one object per line).
     #[arg(long, value_enum, default_value_t = CameraFormat::Csv)]
     pub(crate) format: CameraFormat,
@@ -107,6 +117,11 @@ pub struct BenchArgs {
 pub struct MeasureArgs {
     /// The sequence file (YAML; `-` reads standard input).
     pub(crate) file: PathBuf,
+    /// A model library: a folder where mesh and image files the sequence names are also
+    /// looked for, after the sequence file's folder (repeatable; RAYREEL_ASSETS adds more,
+    /// separated by `:`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) assets: Vec<PathBuf>,
     /// The frame to measure.
     #[arg(long, default_value_t = 0)]
     pub(crate) frame: u64,
@@ -149,6 +164,11 @@ pub struct MeasureArgs {
 pub struct PreviewArgs {
     /// The sequence file (YAML; `-` reads standard input).
     pub(crate) file: PathBuf,
+    /// A model library: a folder where mesh and image files the sequence names are also
+    /// looked for, after the sequence file's folder (repeatable; RAYREEL_ASSETS adds more,
+    /// separated by `:`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) assets: Vec<PathBuf>,
     /// Directory for NAME_path.png and NAME_sheet.png (default: a `preview` folder beside
     /// the frames, e.g. frames/NAME/preview).
     #[arg(long, value_name = "DIR")]
@@ -177,6 +197,11 @@ pub(crate) enum BitDepth {
 pub struct JobArgs {
     /// The sequence file (YAML; `-` reads standard input).
     pub(crate) file: PathBuf,
+    /// A model library: a folder where mesh and image files the sequence names are also
+    /// looked for, after the sequence file's folder (repeatable; RAYREEL_ASSETS adds more,
+    /// separated by `:`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) assets: Vec<PathBuf>,
     /// Image size, e.g. 640x360 (overrides render.width/height).
     #[arg(long, value_parser = parse_size, value_name = "WxH")]
     pub(crate) size: Option<(u32, u32)>,
@@ -329,4 +354,28 @@ pub(crate) const MAX_THREADS: u16 = 1024;
 pub(crate) enum ProgressFormat {
     Human,
     Json,
+}
+
+/// The model libraries of a command: its `--assets` folders, then those of RAYREEL_ASSETS
+/// (`:`-separated), each of which must be a directory.
+pub(crate) fn asset_folders(flags: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
+    let from_env = std::env::var_os("RAYREEL_ASSETS").unwrap_or_default();
+    let env: Vec<PathBuf> = std::env::split_paths(&from_env)
+        .filter(|p| !p.as_os_str().is_empty())
+        .collect();
+    let named = flags
+        .iter()
+        .map(|f| (f, "--assets"))
+        .chain(env.iter().map(|f| (f, "RAYREEL_ASSETS")));
+    let mut out = Vec::new();
+    for (folder, from) in named {
+        if !folder.is_dir() {
+            return Err(format!(
+                "{from} {}: not a directory (a model library is a folder of mesh and image files)",
+                crate::console::printable(&folder.display().to_string())
+            ));
+        }
+        out.push(folder.clone());
+    }
+    Ok(out)
 }

@@ -13,7 +13,7 @@ use std::io::Write;
 const CSV_HEADER: &str = "frame,time,position_x,position_y,position_z,look_at_x,look_at_y,look_at_z,up_x,up_y,up_z,fov,speed,focus_distance";
 
 pub(crate) fn camera(args: CameraArgs) -> Result<(), Error> {
-    let seq = sequence::load(&args.file)?;
+    let seq = sequence::load_with(&args.file, &super::assets(&args.assets)?)?;
     print_warnings(&seq);
     let (first, last) = (seq.timeline.first_frame(), seq.timeline.last_frame());
     let frames = match &args.frames {
@@ -84,11 +84,17 @@ fn chan(n: u64, pose: &Pose, width: u32, height: u32) -> String {
     };
     let s = libm::tan(pose.fov.to_radians() * 0.5) * f64::from(height) / f64::from(width);
     let vfov = (2.0 * libm::atan(s)).to_degrees();
-    let p = pose.position;
-    format!(
-        "{n} {:?} {:?} {:?} {rx:?} {ry:?} {rz:?} {vfov:?}",
-        p.x, p.y, p.z
-    )
+    // `+ 0.0` turns −0 into 0: a channel file has no use for the sign of zero.
+    let [x, y, z, rx, ry, rz] = [
+        pose.position.x,
+        pose.position.y,
+        pose.position.z,
+        rx,
+        ry,
+        rz,
+    ]
+    .map(|v| v + 0.0);
+    format!("{n} {x:?} {y:?} {z:?} {rx:?} {ry:?} {rz:?} {vfov:?}")
 }
 
 /// Euler angles (rx, ry, rz) in degrees with Ry(ry)·Rx(rx)·Rz(rz) = [right, up, −forward]:

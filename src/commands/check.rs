@@ -1,17 +1,28 @@
 //! `rayreel check`: a sequence's one-screen summary and what a job of it may cost.
 
-use super::{Error, out, print_warnings, shown};
+use super::{Error, estimate, out, print_warnings, shown};
 use crate::cli::CheckArgs;
 use crate::console::printable;
-use crate::scene::{Image, Light, Scene, Shape, Texture};
+use crate::frameset::FrameSet;
+use crate::output::{Compression, ExrPrecision, FileFormat};
+use crate::scene::{Image, Light, Scene, Shape, Sky, Texture};
 use crate::sequence::{self, Sequence};
 use crate::settings::Settings;
 use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
 
 pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
-    let seq = sequence::load(&args.file)?;
+    let seq = sequence::load_with(&args.file, &super::assets(&args.assets)?)?;
     print_warnings(&seq);
-    let (cost, warning) = cost(&seq, seq.timeline.frame_count);
+    let t = &seq.timeline;
+    let frames = crate::frameset::FrameSet::range(t.first_frame(), t.last_frame(), 1);
+    let format = crate::sequence::output_pattern(&seq.output, t.last_frame())
+        .ok()
+        .and_then(|p| {
+            FileFormat::for_extension(&p.extension(), false, Compression::Fast, ExrPrecision::Half)
+                .ok()
+        });
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let (cost, warning) = cost(&seq, &frames, cores, format.as_ref());
     for w in warning.into_iter().chain(super::grain::warning(&seq)) {
         eprintln!("{w}");
     }
@@ -21,10 +32,8 @@ pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
     ))
 }
 
-/// Jobs above this many rays are called enormous: about 9 hours at `RAYS_PER_SECOND`.
-pub(crate) const ENORMOUS_RAYS: f64 = 1e12;
-/// Rays a second of the 2-core machine measured under Performance in the README.
-const RAYS_PER_SECOND: f64 = 3e7;
+/// Jobs measured to take longer than this are worth a warning before they start.
+const LONG_JOB_SECONDS: f64 = 24.0 * 3600.0;
 
 /// An upper bound on the rays one frame traces: pixels × samples (adaptive: its maximum) ×
 /// (1 + shadow rays per surface) × surfaces per sample, since each surface a path visits
@@ -62,14 +71,23 @@ fn surfaces_per_sample(seq: &Sequence) -> f64 {
     tree.min(f64::from(crate::tracer::glass::tree_budget(depth)))
 }
 
-/// `up to 2.76e9 rays a frame, 3.98e11 for 144 frames (…)`, and a warning for an enormous
-/// job.
-pub(crate) fn cost(seq: &Sequence, frames: u64) -> (String, Option<String>) {
-    let frame = rays_per_frame(seq);
-    let total = frame * frames as f64;
-    let line = format!(
-        "up to {frame:.2e} rays a frame, {total:.2e} for {frames} frame{} (pixels × samples × (1 + {}) × {})",
-        if frames == 1 { "" } else { "s" },
+/// `about 9.2 min for 240 frames (measured: …); at most 3.98e11 rays (…)`, or `nothing to
+/// render`, and a warning for a job of more than a day: what `frames` of `seq` take on
+/// `threads` threads written as `format`, from a short probe (`estimate`), beside the ray
+/// count's upper bound.
+pub(crate) fn cost(
+    seq: &Sequence,
+    frames: &FrameSet,
+    threads: usize,
+    format: Option<&FileFormat>,
+) -> (String, Option<String>) {
+    let n = frames.len();
+    if n == 0 {
+        return ("nothing to render".into(), None);
+    }
+    let rays = rays_per_frame(seq) * n as f64;
+    let bound = format!(
+        "at most {rays:.2e} rays (an upper bound: pixels × samples × (1 + {}) × {})",
         match seq.scene.lights.iter().any(|l| l.area_samples().is_some()) {
             true => "shadow rays: 1 a light, `samples` an area light",
             false => "lights",
@@ -79,38 +97,34 @@ pub(crate) fn cost(seq: &Sequence, frames: u64) -> (String, Option<String>) {
             false => "max_depth",
         }
     );
-    let warning = (total > ENORMOUS_RAYS).then(|| {
+    let frames_text = super::render::plural(n, "frame");
+    let Some(e) = estimate::estimate(seq, frames, threads, format) else {
+        return (format!("{frames_text}: {bound}"), None);
+    };
+    let about = match e.lower_bound {
+        true => format!("at least {}", estimate::duration(e.seconds)),
+        false => format!("about {}", estimate::duration(e.seconds)),
+    };
+    let line = format!("{about} for {frames_text} ({}); {bound}", e.basis);
+    let warning = (e.seconds > LONG_JOB_SECONDS).then(|| {
         format!(
-            "warning: this job may trace up to {total:.2e} rays, about {} at {RAYS_PER_SECOND:.0e} rays/s; check the size, render.samples and render.max_depth (Ctrl-C or SIGTERM stops a render within about a second)",
-            duration(total / RAYS_PER_SECOND)
+            "warning: this job may take {about} on this machine ({}); check the size, render.samples and render.max_depth (Ctrl-C or SIGTERM stops a render within about a second)",
+            e.basis
         )
     });
     (line, warning)
-}
-
-/// `3.2 hours`, `41 years`.
-fn duration(seconds: f64) -> String {
-    let units = [
-        (31_557_600.0, "years"),
-        (86_400.0, "days"),
-        (3600.0, "hours"),
-        (60.0, "minutes"),
-    ];
-    match units.iter().find(|(unit, _)| seconds >= 2.0 * unit) {
-        Some((unit, name)) => format!("{:.0} {name}", seconds / unit),
-        None => format!("{seconds:.0} seconds"),
-    }
 }
 
 /// The one-screen description `rayreel check` prints.
 pub(crate) fn summary(file: &str, seq: &Sequence) -> String {
     let (scene, s) = (&seq.scene, &seq.settings);
     format!(
-        "{file}: ok\n  objects:    {}\n{}  materials:  {}\n{}  lights:     {}\n{}  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}  output:     {}\n",
+        "{file}: ok\n  objects:    {}\n{}  materials:  {}\n{}{}  lights:     {}\n{}  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}  output:     {}\n",
         objects(scene),
         super::meshes::summary(scene),
         scene.materials.len(),
         textures(scene),
+        sky(scene),
         lights(scene),
         penumbra_notes(scene, s),
         s.width,
@@ -174,17 +188,7 @@ fn textures(scene: &Scene) -> String {
     }
     let mut out = String::new();
     for i in images {
-        let l0 = &i.levels[0];
-        let texels: usize = i.levels.iter().map(|l| l.texels.len()).sum();
-        out += &format!(
-            "  texture:    {} {}x{}, {} mip levels, {:.1} MiB, read in {:.3} s\n",
-            printable(&i.file.to_string_lossy()),
-            l0.width,
-            l0.height,
-            i.levels.len(),
-            (texels * 12) as f64 / (1u64 << 20) as f64,
-            i.load_seconds
-        );
+        out += &format!("  texture:    {}\n", image_line(i, ""));
     }
     if checkers > 0 {
         out += &format!(
@@ -193,6 +197,60 @@ fn textures(scene: &Scene) -> String {
         );
     }
     out
+}
+
+/// The `sky:` line, nothing with a flat background: the image (size, levels, memory, load
+/// time, turn, intensity) or the gradient's colours.
+fn sky(scene: &Scene) -> String {
+    let line = match &scene.sky {
+        None => return String::new(),
+        Some(Sky::Gradient {
+            zenith,
+            horizon,
+            ground,
+        }) => format!(
+            "gradient, zenith {}, horizon {}, ground {}",
+            colour(*zenith),
+            colour(*horizon),
+            colour(*ground)
+        ),
+        Some(Sky::Image {
+            image,
+            rotate,
+            intensity,
+        }) => format!(
+            "{}; rotate {}°, intensity {}",
+            image_line(image, " (equirectangular)"),
+            sequence::num(*rotate),
+            sequence::num(*intensity)
+        ),
+    };
+    format!("  sky:        {line}\n")
+}
+
+/// `textures/sky.png 1024x512{what}, 11 mip levels, 5.3 MiB, read in 0.012 s`.
+fn image_line(i: &Image, what: &str) -> String {
+    let l0 = &i.levels[0];
+    let texels: usize = i.levels.iter().map(|l| l.texels.len()).sum();
+    format!(
+        "{} {}x{}{what}, {} mip levels, {:.1} MiB, read in {:.3} s",
+        printable(&i.file.to_string_lossy()),
+        l0.width,
+        l0.height,
+        i.levels.len(),
+        (texels * 12) as f64 / (1u64 << 20) as f64,
+        i.load_seconds
+    )
+}
+
+/// A colour as the file writes it: `[0.2, 0.35, 0.7]`.
+fn colour(v: glam::DVec3) -> String {
+    format!(
+        "[{}, {}, {}]",
+        sequence::num(v.x),
+        sequence::num(v.y),
+        sequence::num(v.z)
+    )
 }
 
 /// The `lights:` line: `2 (1 point, 1 ambient)`, or `0 (none)`; area lights with their
@@ -286,7 +344,7 @@ fn frames(t: &Timeline) -> String {
         "{} at {} fps ({} s{}), {camera}",
         t.frame_count,
         t.fps_text(),
-        sequence::approx(t.clock.duration.unwrap_or(t.frame_count as f64 / t.fps)),
+        t.running_time_text(),
         match t.first_frame() {
             0 => String::new(),
             first => format!(", frames {first}-{}", t.last_frame()),

@@ -28,11 +28,7 @@ pub(super) fn summary(scene: &Scene) -> String {
             m.file.display(),
             m.triangles.len(),
             m.positions.len(),
-            if m.file_normals {
-                "normals from the file"
-            } else {
-                "normals averaged from the faces"
-            },
+            normals(m.file_normals, m.positions.len()),
             if m.uvs.is_some() {
                 ", texture coordinates"
             } else {
@@ -95,5 +91,18 @@ fn seconds(s: f64) -> String {
         format!("{s:.2} s")
     } else {
         format!("{:.1} ms", s * 1000.0)
+    }
+}
+
+/// Where a mesh's vertex normals came from: `normals from the file`, `normals averaged from
+/// the faces`, or for a file that gives some, `normals from the file for 120 of 200
+/// vertices, averaged from the faces for the rest`.
+fn normals(from_file: usize, vertices: usize) -> String {
+    match from_file {
+        0 => "normals averaged from the faces".into(),
+        n if n == vertices => "normals from the file".into(),
+        n => format!(
+            "normals from the file for {n} of {vertices} vertices, averaged from the faces for the rest"
+        ),
     }
 }

@@ -2,6 +2,7 @@
 
 mod camera;
 mod check;
+mod estimate;
 mod grain;
 mod meshes;
 mod render;
@@ -18,6 +19,7 @@ use std::path::Path;
 
 /// The whole program behind the command line: `main` maps the error to its exit code.
 pub fn run(cli: Cli) -> Result<(), Error> {
+    STARTED.get_or_init(std::time::Instant::now);
     match cli.command {
         Command::Render(args) => render::render(args),
         Command::Status(args) => render::status(args),
@@ -28,6 +30,9 @@ pub fn run(cli: Cli) -> Result<(), Error> {
         Command::Bench(args) => tools::bench(args),
     }
 }
+
+/// When the command started: what loading the sequence took counts in an estimate's setup.
+static STARTED: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
 
 /// Everything that ends a run early, with the exit code it maps to.
 #[derive(Debug, thiserror::Error)]
@@ -75,6 +80,12 @@ fn print_warnings(seq: &Sequence) {
     for w in warnings::for_sequence(seq) {
         eprintln!("warning: {w}");
     }
+}
+
+/// The command's model libraries (`--assets`, RAYREEL_ASSETS); a folder that is not one is a
+/// usage error.
+fn assets(flags: &[std::path::PathBuf]) -> Result<Vec<std::path::PathBuf>, Error> {
+    crate::cli::asset_folders(flags).map_err(Error::Usage)
 }
 
 /// A folder `name` in the frames' directory (`frames/orbit/preview`).

@@ -1,7 +1,9 @@
 //! `render` and `status`: the same job description (sequence, overrides, frames, shard,
 //! format) either rendered or only inspected.
 
-use super::video::{end_video, ffmpeg_line, start_video, video_job, video_notes};
+use super::video::{
+    FromFiles, encode_files, end_video, ffmpeg_line, start_video, video_job, video_notes,
+};
 use super::{Error, out, shown};
 use crate::claim::{self, Claims, Held};
 use crate::cli::job::Job;
@@ -40,6 +42,13 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     let warnings = crate::warnings::for_sequence(&spec.seq);
     let files = spec.render_files(&args)?;
     let video = video_job(&args, &spec.seq, sixteen_bit)?;
+    let reusable = match (&video, &files) {
+        (Some(_), None) => super::video::finished_elsewhere(&spec, &args.job),
+        _ => None,
+    };
+    if let (Some(note), false) = (&reusable, args.quiet) {
+        crate::console::note(&format!("note: {note}"));
+    }
     let Job { seq, frames, .. } = spec;
     if args.dry_run {
         let job = (&seq, &frames, sixteen_bit);
@@ -52,8 +61,11 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     if let Some(files) = &files {
         prepare(files, &frames)?;
     }
+    // With -o, `--video` renders what the files lack and then encodes the files.
+    let from_files = video.is_some() && files.is_some();
     let stream = match &video {
-        Some(video) => Some(video.stream()),
+        Some(video) if !from_files => Some(video.stream()),
+        Some(_) => None,
         None => args.pipe.map(|p| (p, sixteen_bit)),
     };
     let plan = files
@@ -67,16 +79,20 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
     }
     match &video {
         Some(video) if args.print_ffmpeg => progress.command(&video.command_line()),
+        Some(video) if !from_files => progress.note(&super::video::nothing_kept(&video.path)),
         Some(_) => {}
         None => video_notes(&progress, &seq, stream, files.as_ref(), args.print_ffmpeg),
     }
-    let mut encoder = start_video(video.as_ref(), &mut progress)?;
+    let streamed_video = video.as_ref().filter(|_| !from_files);
+    let mut encoder = start_video(streamed_video, &mut progress)?;
     let stream_out = encoder.as_mut().and_then(|e| e.take_input());
     let claims = args
         .claim
         .then(|| Arc::new(Claims::new(Duration::from_secs(args.claim_timeout))));
+    let sequence = Arc::new(seq);
+    let files_kept = files.clone();
     let batch = Batch {
-        sequence: Arc::new(seq),
+        sequence: Arc::clone(&sequence),
         tasks,
         files,
         stream,
@@ -94,7 +110,22 @@ pub(crate) fn render(args: RenderArgs) -> Result<(), Error> {
         Some(encoder) => end_video(encoder, outcome)?,
         None => outcome,
     };
-    finish(outcome, plan.as_ref(), stream.is_some())
+    let (seq, files) = (Arc::clone(&sequence), files_kept);
+    match (video.filter(|_| from_files), files) {
+        (Some(video), Some(files)) => {
+            let encode = FromFiles {
+                seq: &seq,
+                frames: &frames,
+                files: &files,
+                resume: args.resume().unforced(),
+                quiet: args.quiet,
+                json: args.progress == ProgressFormat::Json,
+            };
+            finish(outcome, plan.as_ref(), false, true)?;
+            encode_files(&video, &encode)
+        }
+        _ => finish(outcome, plan.as_ref(), stream.is_some(), false),
+    }
 }
 
 /// `--dry-run`: the warnings, the ffmpeg line if asked for, and the plan; nothing is made.
@@ -118,7 +149,12 @@ fn dry_run(
         line.iter().for_each(|l| crate::console::note(l));
     }
     let video = video.map(|v| v.path.as_path());
-    print_dry_run(seq, (plan.as_ref(), video), frames, args.pipe.is_some())
+    print_dry_run(
+        seq,
+        (plan.as_ref(), video, files),
+        (frames, args.threads),
+        args.pipe.is_some(),
+    )
 }
 
 /// Progress as `--progress` and `--quiet` ask: `total` frames to render of `frame_count`.
@@ -321,29 +357,51 @@ fn report_waiting(progress: &Progress, files: &Files, held: &[u64]) {
 /// stream must never get text.
 fn print_dry_run(
     seq: &Sequence,
-    (plan, video): (Option<&Plan>, Option<&std::path::Path>),
-    frames: &FrameSet,
+    (plan, video, files): (Option<&Plan>, Option<&std::path::Path>, Option<&Files>),
+    (frames, threads): (&FrameSet, Option<u16>),
     piping: bool,
 ) -> Result<(), Error> {
     let (text, rendering) = match (plan, video) {
-        // A video takes every selected frame, whatever the files hold.
-        (plan, Some(video)) => {
-            let summary = plan
-                .map(|p| format!("{}\n", p.summary()))
-                .unwrap_or_default();
-            let video = shown(video);
-            let text = format!("{summary}would render frames {frames} into {video}\n");
-            (text, frames.len())
+        // Without files a video takes every selected frame straight from the tracer.
+        (None, Some(video)) => {
+            let text = format!(
+                "would render frames {frames} straight into {}\nnote: {}\n",
+                shown(video),
+                super::video::nothing_kept(video)
+            );
+            (text, frames.clone())
         }
-        (Some(plan), None) => {
-            let render = plan.to_render();
+        (Some(plan), video) => {
+            let render = match piping {
+                true => frames.clone(),
+                false => plan.to_render(),
+            };
             let reasons: String = plan.reasons().iter().map(|r| format!("{r}\n")).collect();
-            let text = format!("{}\n{reasons}would render: {render}\n", plan.summary());
-            (text, render.len())
+            let what = match render.is_empty() {
+                true => "nothing: every selected frame is finished".to_string(),
+                false => render.to_string(),
+            };
+            let mut text = format!("{}\n{reasons}would render: {what}\n", plan.summary());
+            if let (Some(video), Some(files)) = (video, files) {
+                text += &format!(
+                    "then would encode frames {frames} from {} into {}\n",
+                    files.pattern.ffmpeg(),
+                    shown(video)
+                );
+            }
+            (text, render)
         }
-        (None, None) => (format!("would stream frames: {frames}\n"), frames.len()),
+        (None, None) => (format!("would stream frames: {frames}\n"), frames.clone()),
     };
-    let (cost, warning) = super::check::cost(seq, rendering);
+    let threads = threads.map_or_else(
+        || std::thread::available_parallelism().map_or(1, |n| n.get()),
+        usize::from,
+    );
+    let format = match piping {
+        true => None,
+        false => files.map(|f| &f.format),
+    };
+    let (cost, warning) = super::check::cost(seq, &rendering, threads, format);
     if let Some(w) = warning {
         crate::console::warning(&w);
     }
@@ -418,10 +476,13 @@ fn interrupted_summary(
     format!("interrupted: {done} in this run; run the same command again to render the rest")
 }
 
+/// What the run came to; `encoding_next` when `--video` encodes the files once they are all
+/// rendered (an interruption then says that no video was made).
 fn finish(
     outcome: Result<Outcome, RunError>,
     plan: Option<&Plan>,
     streaming: bool,
+    encoding_next: bool,
 ) -> Result<(), Error> {
     match outcome? {
         Outcome::Complete { .. } => {
@@ -437,6 +498,13 @@ fn finish(
                 }
             )))
         }
+        Outcome::Interrupted { written, .. } if encoding_next => Err(Error::Interrupted(
+            format!(
+                "interrupted: {} in this run, and they stay; no video was made yet: run the same command again to render the rest and encode it",
+                plural(written as u64, "frame file") + " written"
+            ),
+            signals::interrupt_code(),
+        )),
         Outcome::Interrupted { written, streamed } => Err(Error::Interrupted(
             interrupted_summary(written, streamed, plan, streaming),
             signals::interrupt_code(),

@@ -12,7 +12,7 @@ use crate::tools::measure;
 /// with the reason, and then reported as the load error it is (exit 2).
 pub(super) fn preview(args: PreviewArgs) -> Result<(), Error> {
     use crate::tools::preview;
-    let (seq, problem) = sequence::load_drawable(&args.file)?;
+    let (seq, problem) = sequence::load_drawable(&args.file, &super::assets(&args.assets)?)?;
     let (first, last) = (seq.timeline.first_frame(), seq.timeline.last_frame());
     let frames: Vec<u64> = match &args.frames {
         Some(spec) => {
@@ -53,7 +53,7 @@ pub(super) fn preview(args: PreviewArgs) -> Result<(), Error> {
 }
 
 pub(super) fn measure(args: MeasureArgs) -> Result<(), Error> {
-    let mut seq = sequence::load(&args.file)?;
+    let mut seq = sequence::load_with(&args.file, &super::assets(&args.assets)?)?;
     let (first, last) = (seq.timeline.first_frame(), seq.timeline.last_frame());
     if !(first..=last).contains(&args.frame) {
         return Err(Error::Usage(format!(

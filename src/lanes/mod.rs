@@ -34,6 +34,12 @@ fn outlined<R>(f: impl FnOnce() -> R) -> R {
     f()
 }
 
+/// Whether `V`'s lanes hold f32 (else f64).
+#[inline(always)]
+pub(crate) fn single<V: Lanes>() -> bool {
+    V::BOX_SLACK != 0.0
+}
+
 /// A set of lanes, the result of a comparison.
 pub trait Mask: Copy {
     fn none_set() -> Self;

@@ -6,7 +6,7 @@
 
 use super::format::{ExrPrecision, FileFormat};
 use crate::camera::{Camera, Pose};
-use crate::scene::{Intensity, Light, Material, Object, Scene, Shape, Texture};
+use crate::scene::{Intensity, Light, Material, Object, Scene, Shape, Sky, Texture};
 use crate::settings::{Adaptive, Precision, Sampler, Settings};
 use crate::shutter::FrameView;
 use crate::transfer::Encoding;
@@ -221,6 +221,7 @@ impl Canon for Scene {
             materials,
             lights,
             background,
+            sky,
         } = self;
         objects.canon(h);
         materials.canon(h);
@@ -230,6 +231,30 @@ impl Canon for Scene {
             h.write(b"meshes");
             meshes.len().canon(h);
             meshes.iter().for_each(|m| m.digest.canon(h));
+        }
+        // A flat background encodes as before skies existed.
+        if let Some(sky) = sky {
+            h.write(b"sky");
+            sky.canon(h);
+        }
+    }
+}
+
+/// An image sky by its content (the digest of its file and decoding), its turn and
+/// intensity; a gradient by its three colours.
+impl Canon for Sky {
+    fn canon(&self, h: &mut Hasher) {
+        match self {
+            Sky::Image {
+                image,
+                rotate,
+                intensity,
+            } => tagged(h, 0, &[&image.digest, rotate, intensity]),
+            Sky::Gradient {
+                zenith,
+                horizon,
+                ground,
+            } => tagged(h, 1, &[zenith, horizon, ground]),
         }
     }
 }
@@ -492,6 +517,7 @@ mod tests {
             materials: Vec::new(),
             lights: Vec::new(),
             background: DVec3::ZERO,
+            sky: None,
         };
         let png = FileFormat::Png {
             sixteen_bit: false,

@@ -11,6 +11,7 @@ pub(crate) mod format;
 pub(crate) mod identity;
 pub mod png;
 pub(crate) mod record;
+pub(crate) mod reread;
 pub(crate) mod stream;
 pub(crate) mod video;
 

@@ -8,7 +8,7 @@
 
 use super::fingerprint::{Canon, Hasher};
 use super::format::{ExrPrecision, FileFormat};
-use crate::scene::Scene;
+use crate::scene::{Material, Scene};
 use crate::sequence::Sequence;
 use crate::settings::{Aovs, Precision, Sampler, Settings};
 use crate::shutter::FrameView;
@@ -122,7 +122,7 @@ fn scene(scene: &Scene, names: &[String]) -> Vec<(String, String)> {
     };
     let digests: Vec<u64> = scene.meshes.iter().map(|m| m.digest).collect();
     let mut lines = vec![
-        ("background".to_string(), hash(&scene.background)),
+        ("background".to_string(), background(scene)),
         ("objects".into(), hash(&scene.objects)),
         ("lights".into(), hash(&scene.lights)),
         ("meshes".into(), hash(&digests)),
@@ -133,12 +133,79 @@ fn scene(scene: &Scene, names: &[String]) -> Vec<(String, String)> {
     match names.len() <= MAX_NAMED {
         true => lines.extend(names.iter().zip(named).map(|(name, m)| {
             let name = format!("materials.{}", escape(name));
-            (name, hash(m))
+            (name, format!("{} {}", hash(m), material_fields(m)))
         })),
         false => lines.push(("materials".into(), hash(&named.to_vec()))),
     }
     lines.push(("materials.inline".into(), hash(&inline.to_vec())));
     lines
+}
+
+/// The hash of the background: its colour, then (only with one) the sky, as the fingerprint
+/// encodes them.
+fn background(scene: &Scene) -> String {
+    let mut h = Hasher::new();
+    scene.background.canon(&mut h);
+    if let Some(sky) = &scene.sky {
+        h.write(b"sky");
+        sky.canon(&mut h);
+    }
+    h.hex()[..16].to_string()
+}
+
+/// A short hash of each of a material's fields, by their YAML names (`ambient:1a2b3c4d
+/// diffuse:…`): what a stale frame's reason names when a material changed. Only the hash in
+/// front decides whether the material differs (records written before these existed have it
+/// alone).
+fn material_fields(m: &Material) -> String {
+    let short = |parts: &[&dyn Canon]| {
+        let mut h = Hasher::new();
+        parts.iter().for_each(|p| p.canon(&mut h));
+        h.hex()[..8].to_string()
+    };
+    let fields: [(&str, String); 8] = [
+        ("ambient", short(&[&m.ambient, &m.ambient_map])),
+        ("diffuse", short(&[&m.diffuse, &m.diffuse_map])),
+        ("specular", short(&[&m.specular])),
+        ("shininess", short(&[&m.exponent, &m.specular_floor])),
+        ("reflection", short(&[&m.reflection])),
+        ("transmission", short(&[&m.transmission])),
+        ("ior", short(&[&m.ior])),
+        ("fresnel", short(&[&m.fresnel])),
+    ];
+    let fields: Vec<String> = fields.iter().map(|(k, v)| format!("{k}:{v}")).collect();
+    fields.join(" ")
+}
+
+/// The material fields whose hashes differ between two `materials.NAME` values, or None
+/// when either value has none (an older record).
+fn material_change(old: &str, new: &str) -> Option<String> {
+    let fields = |v: &str| -> Vec<(String, String)> {
+        v.split(' ')
+            .skip(1)
+            .filter_map(|f| f.split_once(':'))
+            .map(|(k, h)| (k.to_string(), h.to_string()))
+            .collect()
+    };
+    let (old, new) = (fields(old), fields(new));
+    if old.is_empty() || new.is_empty() {
+        return None;
+    }
+    let changed: Vec<&str> = new
+        .iter()
+        .filter(|(k, h)| old.iter().find(|(o, _)| o == k).is_none_or(|(_, g)| g != h))
+        .map(|(k, _)| k.as_str())
+        .collect();
+    (!changed.is_empty()).then(|| changed.join(", "))
+}
+
+/// The part of a record's value that says whether it differs: a material's hash without its
+/// fields' hashes (see `material_fields`), any other value whole.
+fn deciding<'a>(key: &str, value: Option<&'a str>) -> Option<&'a str> {
+    match key.starts_with("materials.") {
+        true => value.map(|v| v.split(' ').next().unwrap_or(v)),
+        false => value,
+    }
 }
 
 /// A material's name as record text: ASCII letters, digits, `_` and `-` as they are, any
@@ -161,6 +228,9 @@ pub(crate) enum Difference {
     /// Only quality fields differ; `raise` when this job's settings are at least as high in
     /// every one of them (a re-render improves the frame).
     Quality { what: String, raise: bool },
+    /// The size differs, and apart from it only quality fields: a finished frame of another
+    /// size is never replaced unforced.
+    Resized(String),
     /// What the frame shows differs.
     Content(String),
 }
@@ -183,7 +253,7 @@ pub(crate) fn compare(old: Option<&str>, new: &str) -> Difference {
     names.extend(old.iter().map(|f| f.0).filter(|k| get(&new, k).is_none()));
     let changed: Vec<&str> = names
         .into_iter()
-        .filter(|k| get(&old, k) != get(&new, k))
+        .filter(|k| deciding(k, get(&old, k)) != deciding(k, get(&new, k)))
         .collect();
     if changed.is_empty() {
         return Difference::Unknown;
@@ -191,11 +261,13 @@ pub(crate) fn compare(old: Option<&str>, new: &str) -> Difference {
     let what = describe(&changed, |k| (get(&old, k), get(&new, k)));
     // Names come from the file too.
     let what = crate::console::printable(&what).into_owned();
-    match changed.iter().all(|k| QUALITY.contains(k)) {
+    let quality = |k: &&str| QUALITY.contains(k);
+    match changed.iter().all(quality) {
         true => Difference::Quality {
             what,
             raise: raises(&|k| (get(&old, k), get(&new, k))),
         },
+        false if changed.iter().all(|k| quality(k) || *k == "size") => Difference::Resized(what),
         false => Difference::Content(what),
     }
 }
@@ -232,7 +304,10 @@ fn describe<'a>(changed: &[&str], pair: impl Fn(&str) -> Pair<'a>) -> String {
             "background" | "objects" | "lights" | "meshes" | "camera"
         ) || k.starts_with("materials");
         parts.push(match (hashed, old, new) {
-            (true, Some(_), Some(_)) => k.to_string(),
+            (true, Some(o), Some(n)) => match material_change(o, n) {
+                Some(fields) => format!("{k} ({fields})"),
+                None => k.to_string(),
+            },
             _ => {
                 let [old, new] = [old, new].map(|v| shown(v.unwrap_or("none")));
                 format!("{k}: {old} → {new}")
@@ -329,10 +404,27 @@ mod tests {
     #[test]
     fn a_hostile_record_prints_escaped_and_short() {
         let evil = OLD.replace("size=8x8", &format!("size=\x1b[2J{}", "9".repeat(99)));
-        let Difference::Content(what) = compare(Some(&evil), OLD) else {
-            panic!("a size is content")
+        let Difference::Resized(what) = compare(Some(&evil), OLD) else {
+            panic!("only the size differs")
         };
         assert_eq!(what, format!("size: \\u{{1b}}[2J{}… → 8x8", "9".repeat(36)));
+    }
+
+    #[test]
+    fn a_changed_material_names_its_field() {
+        let old = OLD.replace("red=aa", "red=aa ambient:1 diffuse:2 specular:3");
+        let new = OLD.replace("red=aa", "red=ab ambient:1 diffuse:5 specular:3");
+        assert_eq!(
+            compare(Some(&old), &new),
+            Difference::Content("materials.red (diffuse)".into())
+        );
+        // A record without field hashes (an older rayreel's) differs by the hash alone.
+        let same = OLD.replace("samples=4", "samples=2");
+        let same = same.replace("red=aa", "red=aa ambient:1");
+        assert!(matches!(
+            compare(Some(OLD), &same),
+            Difference::Quality { .. }
+        ));
     }
 
     #[test]

@@ -82,8 +82,13 @@ impl Delivery<'_> {
             "SIGINT" => "Ctrl-C again to abort at once",
             _ => "a second signal aborts at once",
         };
+        // A run without frame files (a stream, `--video` without -o) keeps nothing.
+        let kept = match self.batch.files.is_some() {
+            true => "frames already written stay",
+            false => "this run writes no frame files, so nothing it rendered is kept",
+        };
         let text = format!(
-            "rayreel: stopping on {}: {what}; frames already written stay; exit code {} follows ({again})",
+            "rayreel: stopping on {}: {what}; {kept}; exit code {} follows ({again})",
             signal_name(),
             interrupt_code()
         );

@@ -1,5 +1,6 @@
-//! `mesh:` objects: the file resolved against the sequence file's folder (and kept inside
-//! it), read once however often it is placed, and its placement checked.
+//! `mesh:` objects: the file resolved against the sequence file's folder or a model library
+//! the user named (and kept inside them), read once however often it is placed, and its
+//! placement checked.
 //!
 //! ```yaml
 //! - mesh: { file: models/bunny.ply, material: clay, shading: phong, scale: 10, rotate: [0, 30, 0], translate: [0, -1, 0] }
@@ -12,16 +13,16 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 pub(super) struct Meshes {
-    base: PathBuf,
+    folders: Folders,
     loaded: Vec<Arc<Mesh>>,
     by_path: HashMap<PathBuf, usize>,
     warnings: Vec<String>,
 }
 
 impl Meshes {
-    pub(super) fn new(base: &Path) -> Meshes {
+    pub(super) fn new(folders: &Folders) -> Meshes {
         Meshes {
-            base: base.to_owned(),
+            folders: folders.clone(),
             loaded: Vec::new(),
             by_path: HashMap::new(),
             warnings: Vec::new(),
@@ -41,7 +42,7 @@ impl Meshes {
     /// Reads (or reuses) the file of `m` and checks its placement.
     pub(super) fn place(&mut self, path: &str, m: &raw::Mesh) -> Check<Shape> {
         let field = format!("{path}.file");
-        let file = resolve(&self.base, &field, &m.file, "a mesh")?;
+        let file = resolve(&self.folders, &field, &m.file, "a mesh")?;
         let key = std::fs::canonicalize(&file).unwrap_or_else(|_| file.clone());
         let index = match self.by_path.get(&key) {
             Some(&i) => i,
@@ -60,7 +61,7 @@ impl Meshes {
                 self.loaded.len() - 1
             }
         };
-        let place = placement(path, m)?;
+        let place = placement(path, m, &self.loaded[index])?;
         check_reach(path, &place, &self.loaded[index])?;
         Ok(Shape::Mesh {
             mesh: index,
@@ -70,10 +71,35 @@ impl Meshes {
     }
 }
 
-/// `file` against the sequence file's folder `base`; like `output`, a sequence file may only
-/// reach below its own folder (no absolute path, no `..`, no link leading out). `what` names
-/// the kind of file in messages ("a mesh", "a texture").
-pub(super) fn resolve(base: &Path, field: &str, file: &str, what: &str) -> Check<PathBuf> {
+/// Where the files a sequence names (meshes, images) are looked for: the sequence file's
+/// folder, then each model library the user named (`--assets`, `RAYREEL_ASSETS`), in order.
+/// A sequence file names none of them itself, so one received from someone else reads only
+/// below its own folder and the libraries its user chose.
+#[derive(Debug, Clone, Default)]
+pub struct Folders {
+    pub(crate) sequence: PathBuf,
+    pub(crate) assets: Vec<PathBuf>,
+}
+
+impl Folders {
+    pub(crate) fn new(sequence: &Path, assets: &[PathBuf]) -> Folders {
+        Folders {
+            sequence: sequence.to_owned(),
+            assets: assets.to_vec(),
+        }
+    }
+
+    /// Every folder, the sequence's first.
+    fn all(&self) -> impl Iterator<Item = &Path> {
+        std::iter::once(self.sequence.as_path()).chain(self.assets.iter().map(PathBuf::as_path))
+    }
+}
+
+/// `file` against `folders`: the first folder that holds it (or the sequence's folder when
+/// none does, for the reader to say it is missing). Like `output`, a name may not be absolute,
+/// start with `~` or hold `..`, and once symbolic links are followed it must stay below one of
+/// the folders. `what` names the kind of file in messages ("a mesh", "a texture").
+pub(super) fn resolve(folders: &Folders, field: &str, file: &str, what: &str) -> Check<PathBuf> {
     let p = Path::new(file);
     let climbs = p
         .components()
@@ -82,23 +108,39 @@ pub(super) fn resolve(base: &Path, field: &str, file: &str, what: &str) -> Check
         return invalid(
             field,
             format!(
-                "{what} file must be a relative path below the sequence file's folder, without `..` (got `{file}`); copy or link it there"
+                "{what} file must be a relative path below the sequence file's folder (or a model library given with --assets), without `..` (got `{file}`)"
             ),
         );
     }
-    let full = base.join(p);
-    let canonical_base = std::fs::canonicalize(if base.as_os_str().is_empty() {
-        Path::new(".")
-    } else {
-        base
-    });
-    if let (Ok(b), Ok(real)) = (canonical_base, std::fs::canonicalize(&full))
-        && !real.starts_with(&b)
-    {
+    let found = folders
+        .all()
+        .map(|f| f.join(p))
+        .find(|full| std::fs::symlink_metadata(full).is_ok());
+    let Some(full) = found else {
+        if folders.assets.is_empty() {
+            return Ok(folders.sequence.join(p));
+        }
+        let looked: Vec<String> = folders.all().map(shown_folder).collect();
         return invalid(
             field,
             format!(
-                "`{file}` leads outside the sequence file's folder once symbolic links are followed (to {}); copy the file there",
+                "`{file}` is in none of the folders looked in: {}",
+                looked.join(", ")
+            ),
+        );
+    };
+    let Ok(real) = std::fs::canonicalize(&full) else {
+        return Ok(full);
+    };
+    let inside = folders
+        .all()
+        .filter_map(|f| std::fs::canonicalize(shown_path(f)).ok())
+        .any(|root| real.starts_with(root));
+    if !inside {
+        return invalid(
+            field,
+            format!(
+                "`{file}` leads outside the sequence file's folder once symbolic links are followed (to {}); copy the file there, or give the folder it is in with --assets",
                 real.display()
             ),
         );
@@ -106,8 +148,25 @@ pub(super) fn resolve(base: &Path, field: &str, file: &str, what: &str) -> Check
     Ok(full)
 }
 
-fn placement(path: &str, m: &raw::Mesh) -> Check<Placement> {
-    let scale = match m.scale {
+/// A folder as a path to open: the current directory for the empty path (stdin's folder).
+fn shown_path(folder: &Path) -> &Path {
+    match folder.as_os_str().is_empty() {
+        true => Path::new("."),
+        false => folder,
+    }
+}
+
+/// A folder as messages name it.
+fn shown_folder(folder: &Path) -> String {
+    crate::console::printable(&shown_path(folder).display().to_string()).into_owned()
+}
+
+/// Where `m` puts `mesh`: `scale` along the file's axes, the file's `up` axis turned to +y,
+/// `rotate`, then `fit` (a uniform factor making the largest extent `fit` scene units) and
+/// `origin` (which point of the bounds `translate` puts in place), all folded into one
+/// placement: world = translate′ + (R·U)·(scale′ ∘ p) (docs/spec/mesh.md#placement).
+fn placement(path: &str, m: &raw::Mesh, mesh: &Mesh) -> Check<Placement> {
+    let mut scale = match m.scale {
         None => DVec3::ONE,
         Some(raw::Scale(v)) => vector(&format!("{path}.scale"), v)?,
     };
@@ -121,14 +180,102 @@ fn placement(path: &str, m: &raw::Mesh) -> Check<Placement> {
         );
     }
     let rotate = vector(&format!("{path}.rotate"), m.rotate.unwrap_or_default())?;
+    let up = up_axis(&format!("{path}.up"), m.up.as_deref())?;
+    let rotation = rotation(rotate) * up;
+    let mut translate = vector(
+        &format!("{path}.translate"),
+        m.translate.unwrap_or_default(),
+    )?;
+    if let Some(fit) = m.fit {
+        let fit = in_range(
+            &format!("{path}.fit"),
+            fit,
+            MIN_SCALE,
+            MAX_MAGNITUDE,
+            "a positive length in [1e-100, 1e100]",
+        )?;
+        let (lo, hi) = placed_bounds(mesh, scale, rotation, DVec3::ZERO);
+        let factor = fit / (hi - lo).max_element();
+        scale *= factor;
+        let small = scale.abs().min_element();
+        if !(small >= MIN_SCALE && scale.abs().max_element() <= MAX_MAGNITUDE) {
+            return invalid(
+                format!("{path}.fit"),
+                format!(
+                    "fitting the model to {} scales it by {}, beyond what coordinates can hold",
+                    num(fit),
+                    num(factor)
+                ),
+            );
+        }
+    }
+    let origin = m.origin.unwrap_or_default();
+    if origin != raw::Origin::File {
+        let (lo, hi) = placed_bounds(mesh, scale, rotation, DVec3::ZERO);
+        let centre = (lo + hi) * 0.5;
+        translate -= match origin {
+            raw::Origin::Bottom => DVec3::new(centre.x, lo.y, centre.z),
+            _ => centre,
+        };
+    }
     Ok(Placement {
         scale,
-        rotation: rotation(rotate),
-        translate: vector(
-            &format!("{path}.translate"),
-            m.translate.unwrap_or_default(),
-        )?,
+        rotation,
+        translate,
     })
+}
+
+/// The rotation turning the file's `up` axis (`y` by default; `z`, `x`, or any of them
+/// negated, `+` allowed) to +y, by quarter turns, so it is exact: z → +y is −90° about X
+/// (Blender's Z-up, −Y-forward files then face +Z), x → +y is 90° about Z, −y is 180° about X,
+/// −z is 90° about X, −x is −90° about Z.
+fn up_axis(path: &str, up: Option<&str>) -> Check<DMat3> {
+    let degrees = match up.map(|u| u.trim_start_matches('+')) {
+        None | Some("y") | Some("Y") => [0.0, 0.0, 0.0],
+        Some("z") | Some("Z") => [-90.0, 0.0, 0.0],
+        Some("x") | Some("X") => [0.0, 0.0, 90.0],
+        Some("-y") | Some("-Y") => [180.0, 0.0, 0.0],
+        Some("-z") | Some("-Z") => [90.0, 0.0, 0.0],
+        Some("-x") | Some("-X") => [0.0, 0.0, -90.0],
+        Some(other) => {
+            return invalid(
+                path,
+                format!(
+                    "the file's up axis is one of y, z, x, -y, -z, -x (got `{}`)",
+                    crate::console::printable(other)
+                ),
+            );
+        }
+    };
+    Ok(rotation(DVec3::from_array(degrees)))
+}
+
+/// The per-axis smallest and largest of translate + R·(scale ∘ p) over the vertices the
+/// mesh's triangles use, each point computed as `Placement::point` does.
+pub(crate) fn placed_bounds(
+    mesh: &Mesh,
+    scale: DVec3,
+    rotation: DMat3,
+    translate: DVec3,
+) -> (DVec3, DVec3) {
+    let place = Placement {
+        scale,
+        rotation,
+        translate,
+    };
+    let mut used = vec![false; mesh.positions.len()];
+    mesh.triangles
+        .iter()
+        .flatten()
+        .for_each(|&i| used[i as usize] = true);
+    let points = mesh.positions.iter().zip(&used).filter(|(_, u)| **u);
+    points.fold(
+        (DVec3::INFINITY, DVec3::NEG_INFINITY),
+        |(lo, hi), (p, _)| {
+            let q = place.point(*p);
+            (lo.min(q), hi.max(q))
+        },
+    )
 }
 
 /// The smallest scale factor accepted: scaled coordinates must stay normal f64 numbers.

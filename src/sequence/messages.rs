@@ -25,7 +25,7 @@ pub(super) fn yaml_error(file: &Path, source: &str, e: &serde_yaml::Error) -> Lo
                 let written = e.location().map_or("", |l| scalar_at(source, l.index()));
                 tagged_number(&message, written)
             })
-            .unwrap_or_else(|| rust_types_in_words(&message)),
+            .unwrap_or_else(|| did_you_mean(&rust_types_in_words(&message))),
     };
     LoadError::Invalid {
         file: file.to_owned(),
@@ -51,6 +51,51 @@ fn rust_types_in_words(message: &str) -> String {
         }
     }
     message
+}
+
+/// serde's `unknown field `radus`, expected one of `center`, `radius`, …` (or `unknown
+/// variant`) with `; did you mean `radius`?` appended when one expected name is close: the
+/// nearest by edit distance, at most a third of its length away (at least 1), or equal but
+/// for case.
+pub(super) fn did_you_mean(message: &str) -> String {
+    let Some(given) = ["unknown field `", "unknown variant `"]
+        .iter()
+        .find_map(|p| message.split_once(p).map(|(_, rest)| rest))
+        .and_then(|rest| rest.split_once('`'))
+        .map(|(given, _)| given)
+    else {
+        return message.to_string();
+    };
+    let Some((_, expected)) = message.split_once(", expected ") else {
+        return message.to_string();
+    };
+    let names = expected.split('`').skip(1).step_by(2);
+    let best = names
+        .map(|name| (edits(&given.to_lowercase(), &name.to_lowercase()), name))
+        .filter(|(d, name)| *d <= (name.chars().count() / 3).max(1))
+        .min_by_key(|(d, _)| *d);
+    match best {
+        Some((_, name)) => format!("{message}; did you mean `{name}`?"),
+        None => message.to_string(),
+    }
+}
+
+/// The Levenshtein distance between `a` and `b`, in characters.
+fn edits(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let next = (diagonal + usize::from(ca != cb))
+                .min(row[j] + 1)
+                .min(row[j + 1] + 1);
+            diagonal = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
 }
 
 /// serde_yaml reads a number beyond f64 (`1e400`) as a string and one beyond 64 bits as an
@@ -169,40 +214,6 @@ pub(super) fn got_num(v: f64) -> String {
 }
 
 pub(crate) use crate::console::num;
-
-/// A number rounded to 6 significant digits, for figures rayreel computes (a duration of
-/// 100 frames at 24 fps is `4.16667` s), plain from 1e-4 up to 1e6 and in exponent form
-/// beyond.
-pub(crate) fn approx(v: f64) -> String {
-    let exact = num(v);
-    let significant = exact
-        .trim_start_matches('-')
-        .split('e')
-        .next()
-        .unwrap_or_default()
-        .replace('.', "")
-        .trim_matches('0')
-        .len();
-    if v == 0.0 || !v.is_finite() || ((1e-4..1e16).contains(&v.abs()) && significant <= 6) {
-        return exact;
-    }
-    let exponent = v.abs().log10().floor() as i32;
-    if (-4..6).contains(&exponent) {
-        let decimals = (5 - exponent).max(0) as usize;
-        return trim_zeros(&format!("{v:.decimals$}")).to_string();
-    }
-    let text = format!("{v:.5e}");
-    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
-    format!("{}e{exponent}", trim_zeros(mantissa))
-}
-
-/// `1.500` → `1.5`, `2.000` → `2`; whole numbers without a point stay as they are.
-pub(super) fn trim_zeros(s: &str) -> &str {
-    match s.contains('.') {
-        true => s.trim_end_matches('0').trim_end_matches('.'),
-        false => s,
-    }
-}
 
 /// `[x, y, z]` with each number short (see `num`).
 pub(super) fn num3(v: DVec3) -> String {

@@ -5,6 +5,7 @@
 //! The checks below work on the parsed structs and name the field by its path; `locate` then
 //! finds that path's line and column by walking the document once more.
 
+mod aim;
 mod fields;
 mod guard;
 mod locate;
@@ -23,7 +24,8 @@ use scene::*;
 use settings::*;
 
 pub use guard::nesting_depth;
-pub(crate) use messages::{approx, num};
+pub use meshes::Folders;
+pub(crate) use messages::num;
 pub use settings::{
     DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD, FILM_FINAL_MAX,
     FILM_FINAL_THRESHOLD, FILM_SAMPLING_MAX, FILM_THRESHOLD, LENS_SAMPLES, SHUTTER_SAMPLES,
@@ -86,6 +88,8 @@ pub struct Sequence {
     /// The names of `materials:`, in the order of the first `Scene::materials` (those written
     /// inline in objects follow them there, unnamed).
     pub(crate) material_names: Vec<String>,
+    /// Each object's `name:`, if it has one, in `objects:` order.
+    pub(crate) object_names: Vec<Option<String>>,
     /// Output pattern; a run of `#` stands for the zero-padded frame number.
     pub(crate) output: String,
     /// The file's `render.quality`, if any (draft also halves the resolution).
@@ -133,14 +137,26 @@ fn invalid<T>(path: impl Into<String>, message: impl Into<String>) -> Check<T> {
 /// Reads and validates the sequence file at `file` (`-` reads standard input). Only the file
 /// decides the result: the command line's settings are applied afterwards, by the job.
 pub fn load(file: &Path) -> Result<Sequence, LoadError> {
-    parse(file, &read(file)?)
+    load_with(file, &[])
 }
 
-/// `load`, except that a file whose every field is valid but whose camera cannot be built at
-/// some key or frame still loads: that error comes back beside the sequence, for `preview` to
-/// draw the path it describes.
-pub(crate) fn load_drawable(file: &Path) -> Result<(Sequence, Option<LoadError>), LoadError> {
-    parse_drawable(file, &read(file)?)
+/// `load`, with mesh and image files also looked for in the model libraries `assets` (after
+/// the sequence file's folder; see `Folders`).
+pub fn load_with(file: &Path, assets: &[PathBuf]) -> Result<Sequence, LoadError> {
+    match parse_drawable(file, &read(file)?, assets)? {
+        (_, Some(problem)) => Err(problem),
+        (seq, None) => Ok(seq),
+    }
+}
+
+/// `load_with`, except that a file whose every field is valid but whose camera cannot be
+/// built at some key or frame still loads: that error comes back beside the sequence, for
+/// `preview` to draw the path it describes.
+pub(crate) fn load_drawable(
+    file: &Path,
+    assets: &[PathBuf],
+) -> Result<(Sequence, Option<LoadError>), LoadError> {
+    parse_drawable(file, &read(file)?, assets)
 }
 
 /// Whether `file` names standard input (`-`).
@@ -199,7 +215,7 @@ fn too_large(file: &Path, len: u64) -> LoadError {
 
 /// `load` for text already in memory; `file` is only used to name things.
 pub fn parse(file: &Path, text: &str) -> Result<Sequence, LoadError> {
-    match parse_drawable(file, text)? {
+    match parse_drawable(file, text, &[])? {
         (_, Some(problem)) => Err(problem),
         (seq, None) => Ok(seq),
     }
@@ -209,6 +225,7 @@ pub fn parse(file: &Path, text: &str) -> Result<Sequence, LoadError> {
 pub(crate) fn parse_drawable(
     file: &Path,
     text: &str,
+    assets: &[PathBuf],
 ) -> Result<(Sequence, Option<LoadError>), LoadError> {
     // Editors on Windows start UTF-8 files with a byte-order mark; libyaml would take it for
     // the start of a second document.
@@ -248,15 +265,52 @@ pub(crate) fn parse_drawable(
         true => Path::new(""),
         false => file.parent().unwrap_or(Path::new("")),
     };
-    let (mut seq, problem) = validate(raw, &name, base).map_err(located)?;
-    seq.warnings
-        .extend(lost_output_pattern(file, text, &seq.output));
+    let cut = comment_cut(text);
+    // An output the comment cut short may be refused for what is left of it (no file type):
+    // the comment is the cause to name.
+    let located = |e: Invalid| match (&cut, e.path == "output") {
+        (Some(cut), true) => located(Invalid {
+            message: cut.explain(&format!("what is left, `{}`, is refused", cut.kept)),
+            ..e
+        }),
+        _ => located(e),
+    };
+    let folders = Folders::new(base, assets);
+    let (mut seq, problem) = validate(raw, &name, &folders).map_err(located)?;
+    if let Some(cut) = &cut {
+        let at = format!("{}:{}:{}", file.display(), cut.line, cut.col);
+        let what = format!("frames go to `{}`", seq.output);
+        seq.warnings
+            .push(format!("{at}: output: {}", cut.explain(&what)));
+    }
     Ok((seq, problem.map(located)))
 }
 
 /// `output: ####.png` unquoted: YAML reads a `#` after a space as the start of a comment, so
-/// the pattern is lost (and the default used) without a word; the line says what was meant.
-fn lost_output_pattern(file: &Path, text: &str, used: &str) -> Option<String> {
+/// the pattern is lost (and the default used, or what is left refused) without a word; the
+/// loader says what was meant.
+struct CommentCut {
+    line: usize,
+    col: usize,
+    /// What YAML kept, what it dropped, and the whole value as written.
+    kept: String,
+    lost: String,
+    whole: String,
+}
+
+impl CommentCut {
+    /// `` `#` after a space starts a YAML comment, so `####.png` was dropped and WHAT; quote
+    /// the pattern: output: "frames/####.png" ``.
+    fn explain(&self, what: &str) -> String {
+        format!(
+            "`#` after a space starts a YAML comment, so `{}` was dropped and {what}; quote the pattern: output: \"{}\"",
+            self.lost, self.whole
+        )
+    }
+}
+
+/// The top-level `output:` line when a comment cut a pattern-like text off its value.
+fn comment_cut(text: &str) -> Option<CommentCut> {
     let (n, line) = text
         .lines()
         .enumerate()
@@ -271,15 +325,12 @@ fn lost_output_pattern(file: &Path, text: &str, used: &str) -> Option<String> {
         .or(value.starts_with('#').then_some(0))?;
     let lost = value[comment + 1..].trim();
     let pattern_like = lost.starts_with('#') || [".png", ".exr"].iter().any(|e| lost.contains(e));
-    pattern_like.then(|| {
-        format!(
-            "{}:{}:{}: output: `#` after a space starts a YAML comment, so `{}` was dropped and frames go to `{used}`; quote the pattern: output: \"{}\"",
-            file.display(),
-            n + 1,
-            "output:".len() + comment + 1,
-            value[comment..].trim(),
-            value.trim()
-        )
+    pattern_like.then(|| CommentCut {
+        line: n + 1,
+        col: "output:".len() + comment + 1,
+        kept: value[..comment].trim().to_string(),
+        lost: value[comment..].trim().to_string(),
+        whole: value.trim().to_string(),
     })
 }
 
@@ -311,9 +362,15 @@ fn film(s: &Settings, timeline: &Timeline) -> Film {
 }
 
 /// The sequence, and the first key or frame whose camera cannot be built (see `load_drawable`).
-fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Option<Invalid>)> {
+fn validate(
+    mut raw: raw::Sequence,
+    name: &str,
+    folders: &Folders,
+) -> Check<(Sequence, Option<Invalid>)> {
     let (mut settings, explicit) = render_settings(&raw.render)?;
-    let (scene, mut warnings) = scene_of(&raw, base)?;
+    let object_names = aim::names(&raw.objects)?;
+    let (scene, mut warnings) = scene_of(&raw, folders)?;
+    aim::resolve(&mut raw, &scene, &object_names)?;
     let camera = raw.camera.as_ref().map(camera_key).transpose()?;
     let loaded = match (&raw.timeline, camera) {
         (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
@@ -334,6 +391,7 @@ fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Opt
         scene,
         settings,
         material_names: raw.materials.0.iter().map(|(n, _)| n.clone()).collect(),
+        object_names,
         output: output_of(raw.output, name, &timeline)?,
         quality: raw.render.quality,
         explicit,
@@ -346,14 +404,11 @@ fn validate(raw: raw::Sequence, name: &str, base: &Path) -> Check<(Sequence, Opt
     Ok((seq, loaded.problem))
 }
 
-/// The background, materials, objects (meshes read from below `base`) and lights, checked in
-/// that order, with the meshes' warnings.
-fn scene_of(raw: &raw::Sequence, base: &Path) -> Check<(Scene, Vec<String>)> {
-    let background = color(
-        "render.background",
-        raw.render.background.unwrap_or_default(),
-    )?;
-    let mut textures = textures::Textures::new(base);
+/// The background, materials, objects (meshes read from below `folders`) and lights, checked
+/// in that order, with the meshes' warnings.
+fn scene_of(raw: &raw::Sequence, folders: &Folders) -> Check<(Scene, Vec<String>)> {
+    let mut textures = textures::Textures::new(folders);
+    let (background, sky) = textures.background(raw.render.background.as_ref())?;
     let mut materials = Vec::new();
     for (name, m) in &raw.materials.0 {
         materials.push(material(&format!("materials.{name}"), m, &mut textures)?);
@@ -369,7 +424,7 @@ fn scene_of(raw: &raw::Sequence, base: &Path) -> Check<(Scene, Vec<String>)> {
             ),
         );
     }
-    let mut meshes = meshes::Meshes::new(base);
+    let mut meshes = meshes::Meshes::new(folders);
     for (i, o) in raw.objects.iter().enumerate() {
         let path = format!("objects[{i}]");
         let files = (&mut meshes, &mut textures);
@@ -386,6 +441,7 @@ fn scene_of(raw: &raw::Sequence, base: &Path) -> Check<(Scene, Vec<String>)> {
         materials,
         lights,
         background,
+        sky,
     };
     Ok((scene, warnings))
 }
@@ -415,7 +471,7 @@ fn output_of(output: Option<String>, name: &str, timeline: &Timeline) -> Check<S
 fn camera_key(c: &raw::Camera) -> Check<Key> {
     let pose = Pose {
         position: vector("camera.position", c.position)?,
-        look_at: vector("camera.look_at", c.look_at)?,
+        look_at: vector("camera.look_at", c.look_at.point())?,
         up: direction("camera.up", c.up.unwrap_or([0.0, 1.0, 0.0]))?,
         fov: fov("camera.fov", c.fov.unwrap_or(90.0))?,
     };

@@ -29,7 +29,7 @@ pub struct Render {
     pub width: Option<u64>,
     pub height: Option<u64>,
     pub max_depth: Option<u64>,
-    pub background: Option<V3>,
+    pub background: Option<Background>,
     pub depth: Option<bool>,
     pub samples: Option<u64>,
     pub adaptive: Option<Adaptive>,
@@ -43,6 +43,51 @@ pub struct Render {
     pub precision: Option<crate::settings::Precision>,
     pub aov: Option<Vec<crate::settings::Aov>>,
     pub denoise: Option<bool>,
+}
+
+/// `render.background`: a colour triple, or a sky (`{ image: … }`, `{ gradient: … }`).
+#[derive(Debug, Clone)]
+pub enum Background {
+    Color(V3),
+    Sky(Box<Sky>),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sky {
+    pub image: Option<String>,
+    pub rotate: Option<f64>,
+    pub encoding: Option<ImageEncoding>,
+    pub intensity: Option<f64>,
+    pub gradient: Option<Gradient>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Gradient {
+    pub zenith: V3,
+    pub horizon: V3,
+    pub ground: Option<V3>,
+}
+
+impl<'de> Deserialize<'de> for Background {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct B;
+        impl<'de> Visitor<'de> for B {
+            type Value = Background;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a colour triple [r, g, b] or a sky ({ image: … } or { gradient: … })")
+            }
+            fn visit_seq<A: de::SeqAccess<'de>>(self, seq: A) -> Result<Background, A::Error> {
+                V3::deserialize(de::value::SeqAccessDeserializer::new(seq)).map(Background::Color)
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Background, A::Error> {
+                Sky::deserialize(de::value::MapAccessDeserializer::new(map))
+                    .map(|s| Background::Sky(Box::new(s)))
+            }
+        }
+        d.deserialize_any(B)
+    }
 }
 
 #[derive(Debug, Deserialize)]
@@ -74,7 +119,7 @@ pub enum Sampler {
 #[serde(deny_unknown_fields)]
 pub struct Camera {
     pub position: V3,
-    pub look_at: V3,
+    pub look_at: Target,
     pub up: Option<V3>,
     pub fov: Option<f64>,
     pub aperture: Option<f64>,
@@ -250,6 +295,8 @@ pub struct Object {
     pub sphere: Option<Sphere>,
     pub plane: Option<Plane>,
     pub mesh: Option<Mesh>,
+    /// What camera keys call it (`look_at: { object: NAME }`) and messages name it by.
+    pub name: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -261,6 +308,22 @@ pub struct Mesh {
     pub scale: Option<Scale>,
     pub rotate: Option<V3>,
     pub translate: Option<V3>,
+    /// The file's up axis (`y`, `z`, `x`, `-y`, …): turned to +y before `rotate`.
+    pub up: Option<String>,
+    /// The largest extent, after scale, up and rotate, in scene units.
+    pub fit: Option<f64>,
+    /// Which point of the model `translate` places: `file` (its own origin), `center` or
+    /// `bottom` (of its bounds).
+    pub origin: Option<Origin>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Origin {
+    #[default]
+    File,
+    Center,
+    Bottom,
 }
 
 /// A mesh's `scale`: one number for every axis (`2`) or a triple.
@@ -408,7 +471,7 @@ pub struct Keyframe {
     /// A frame number, as Blender keys: the key is at that frame's own time.
     pub frame: Option<u64>,
     pub position: Option<V3>,
-    pub look_at: Option<V3>,
+    pub look_at: Option<Target>,
     pub up: Option<V3>,
     pub fov: Option<f64>,
     pub aperture: Option<f64>,
@@ -421,7 +484,7 @@ pub struct Keyframe {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Orbit {
-    pub center: V3,
+    pub center: Target,
     pub radius: f64,
     #[serde(default)]
     pub height: f64,
@@ -429,9 +492,55 @@ pub struct Orbit {
     pub start_angle: f64,
     pub turns: Option<f64>,
     pub duration: f64,
-    pub look_at: Option<V3>,
+    pub look_at: Option<Target>,
     pub up: Option<V3>,
     pub fov: Option<f64>,
+}
+
+/// A point the camera aims at (or an orbit circles): a triple, or `{ object: NAME }`, the
+/// centre of the bounds of the object of that `name:`. The loader replaces every object by
+/// its point before the timeline reads it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Target {
+    Point(V3),
+    Object(String),
+}
+
+impl Target {
+    /// The point; an object not yet replaced by its point gives NaN, which the checks of
+    /// every point refuse.
+    pub fn point(&self) -> V3 {
+        match self {
+            Target::Point(v) => *v,
+            Target::Object(_) => [f64::NAN; 3],
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectTarget {
+    object: String,
+}
+
+impl<'de> Deserialize<'de> for Target {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct T;
+        impl<'de> Visitor<'de> for T {
+            type Value = Target;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a point [x, y, z] or an object's name ({ object: NAME })")
+            }
+            fn visit_seq<A: de::SeqAccess<'de>>(self, seq: A) -> Result<Target, A::Error> {
+                V3::deserialize(de::value::SeqAccessDeserializer::new(seq)).map(Target::Point)
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Target, A::Error> {
+                ObjectTarget::deserialize(de::value::MapAccessDeserializer::new(map))
+                    .map(|t| Target::Object(t.object))
+            }
+        }
+        d.deserialize_any(T)
+    }
 }
 
 /// A number, or a fraction of whole numbers kept exact until the loader divides it once:

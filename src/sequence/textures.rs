@@ -8,7 +8,7 @@
 //! ```
 
 use super::*;
-use crate::scene::{Image, Level, Texture};
+use crate::scene::{Image, Level, Sky, Texture};
 use glam::DVec2;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -24,14 +24,14 @@ const MIN_CELL: f64 = 1e-100;
 
 /// The images the materials use, in order of first use, each read once.
 pub(super) struct Textures {
-    base: PathBuf,
+    folders: super::meshes::Folders,
     by_path: HashMap<(PathBuf, bool), Arc<Image>>,
 }
 
 impl Textures {
-    pub(super) fn new(base: &Path) -> Textures {
+    pub(super) fn new(folders: &super::meshes::Folders) -> Textures {
         Textures {
-            base: base.to_owned(),
+            folders: folders.clone(),
             by_path: HashMap::new(),
         }
     }
@@ -74,23 +74,86 @@ impl Textures {
                 DVec2::new(v.x, v.y)
             }
         };
-        let f = format!("{field}.image");
-        let path = super::meshes::resolve(&self.base, &f, file, "a texture")?;
         let linear = map.encoding == Some(raw::ImageEncoding::Linear);
+        let image = self.read(&format!("{field}.image"), file, linear)?;
+        Ok(Texture::Image { image, scale })
+    }
+
+    /// The image `file` names (field `f`), read once for every use with the same decoding.
+    fn read(&mut self, f: &str, file: &str, linear: bool) -> Check<Arc<Image>> {
+        let path = super::meshes::resolve(&self.folders, f, file, "an image")?;
         let key = (
             std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone()),
             linear,
         );
-        let image = match self.by_path.get(&key) {
-            Some(i) => i.clone(),
-            None => {
-                let image = load(&path, linear).or_else(|m| invalid(&f, m))?;
-                let image = Arc::new(image);
-                self.by_path.insert(key, image.clone());
-                image
-            }
+        if let Some(i) = self.by_path.get(&key) {
+            return Ok(i.clone());
+        }
+        let image = Arc::new(load(&path, linear).or_else(|m| invalid(f, m))?);
+        self.by_path.insert(key, image.clone());
+        Ok(image)
+    }
+
+    /// `render.background`: a colour, or a sky and the colour that stands for it where one
+    /// colour must do (the image's mean, the gradient's horizon).
+    pub(super) fn background(
+        &mut self,
+        b: Option<&raw::Background>,
+    ) -> Check<(DVec3, Option<Sky>)> {
+        const F: &str = "render.background";
+        let sky = match b {
+            None => return Ok((DVec3::ZERO, None)),
+            Some(raw::Background::Color(c)) => return Ok((color(F, *c)?, None)),
+            Some(raw::Background::Sky(s)) => s,
         };
-        Ok(Texture::Image { image, scale })
+        match (&sky.image, &sky.gradient) {
+            (Some(file), None) => {
+                let intensity = in_range(
+                    &format!("{F}.intensity"),
+                    sky.intensity.unwrap_or(1.0),
+                    0.0,
+                    MAX_COLOR,
+                    "in [0, 1e6]",
+                )?;
+                let rotate = number(&format!("{F}.rotate"), sky.rotate.unwrap_or(0.0))?;
+                let linear = sky.encoding == Some(raw::ImageEncoding::Linear);
+                let image = self.read(&format!("{F}.image"), file, linear)?;
+                let texture = Texture::Image {
+                    image: image.clone(),
+                    scale: DVec2::ONE,
+                };
+                let mean = mean(&texture) * intensity;
+                let sky = Sky::Image {
+                    image,
+                    rotate,
+                    intensity,
+                };
+                Ok((mean, Some(sky)))
+            }
+            (None, Some(g)) => {
+                if sky.rotate.is_some() || sky.encoding.is_some() || sky.intensity.is_some() {
+                    return invalid(
+                        F,
+                        "`rotate`, `encoding` and `intensity` belong to an image sky; a gradient has only its three colours",
+                    );
+                }
+                let horizon = color(&format!("{F}.gradient.horizon"), g.horizon)?;
+                let sky = Sky::Gradient {
+                    zenith: color(&format!("{F}.gradient.zenith"), g.zenith)?,
+                    horizon,
+                    ground: match g.ground {
+                        Some(c) => color(&format!("{F}.gradient.ground"), c)?,
+                        None => horizon,
+                    },
+                };
+                Ok((horizon, Some(sky)))
+            }
+            (None, None) => invalid(
+                F,
+                "a sky needs `image:` or `gradient:` (or give a colour [r, g, b])",
+            ),
+            (Some(_), Some(_)) => invalid(F, "give `image:` or `gradient:`, not both"),
+        }
     }
 }
 

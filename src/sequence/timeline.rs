@@ -303,7 +303,11 @@ fn key_pose(path: &str, k: &raw::Keyframe, before: Option<Pose>) -> Check<Pose> 
     };
     Ok(Pose {
         position: field("position", k.position, before.map(|p| p.position))?,
-        look_at: field("look_at", k.look_at, before.map(|p| p.look_at))?,
+        look_at: field(
+            "look_at",
+            k.look_at.as_ref().map(raw::Target::point),
+            before.map(|p| p.look_at),
+        )?,
         up,
         fov: match k.fov {
             Some(f) => fov(&format!("{path}.fov"), f)?,
@@ -347,7 +351,7 @@ fn ease(path: &str, i: usize, count: usize, value: Option<&str>) -> Check<Ease> 
 
 fn orbit(o: &raw::Orbit, camera: Option<Key>) -> Check<Orbit> {
     let p = "timeline.orbit";
-    let center = vector(&format!("{p}.center"), o.center)?;
+    let center = vector(&format!("{p}.center"), o.center.point())?;
     Ok(Orbit {
         center,
         radius: positive(&format!("{p}.radius"), o.radius)?,
@@ -355,8 +359,8 @@ fn orbit(o: &raw::Orbit, camera: Option<Key>) -> Check<Orbit> {
         start_angle: number(&format!("{p}.start_angle"), o.start_angle)?,
         turns: number(&format!("{p}.turns"), o.turns.unwrap_or(1.0))?,
         duration: positive(&format!("{p}.duration"), o.duration)?,
-        look_at: match o.look_at {
-            Some(v) => vector(&format!("{p}.look_at"), v)?,
+        look_at: match &o.look_at {
+            Some(v) => vector(&format!("{p}.look_at"), v.point())?,
             None => center,
         },
         up: match o.up {

@@ -291,6 +291,13 @@ impl Timeline {
         }
     }
 
+    /// How long the film runs: frame_count / fps seconds, each frame showing for 1/fps, as
+    /// `10.04` (two decimals, trailing zeros dropped). `check` and `preview` both say this.
+    pub(crate) fn running_time_text(&self) -> String {
+        let text = format!("{:.2}", self.frame_count as f64 / self.fps);
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+
     pub fn pose_of(&self, n: u64) -> Pose {
         self.camera_at(self.time_of(n))
     }

@@ -14,6 +14,7 @@ use super::intersect::{plane_hit, sphere_hit};
 use super::mesh::Instance;
 use super::path::Eye;
 use super::shade::{NEGLIGIBLE_WEIGHT, Shaded, powi, shade_hit};
+use super::sky::Background;
 use super::texture::{self, Cone};
 use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{Material, Object, Shape};
@@ -218,7 +219,7 @@ pub(super) fn trace_tree<V: Lanes>(
     max_depth: u32,
     rays: &mut u64,
 ) -> (V3<V>, V::M) {
-    let background = V3::splat(world.scene.background);
+    let background = Background::of(world);
     let budget = tree_budget(max_depth);
     let mut covered = V::M::none_set();
     let mut spent = [0u32; MAX_LANES];
@@ -242,7 +243,9 @@ pub(super) fn trace_tree<V: Lanes>(
             let hit = world.geometry.nearest(&b.rays, from_origin, active);
             let missed = active.andnot(hit.hit);
             if missed.any() && !(depth == 0 && eye.transparent) {
-                color = V3::select(missed, color + background * b.weight, color);
+                let spread = if textured { Some(b.cone.spread) } else { None };
+                let seen = background.seen(&b.rays.dir, missed, spread);
+                color = V3::select(missed, color + seen * b.weight, color);
             }
             if depth == 0 {
                 covered = hit.hit;

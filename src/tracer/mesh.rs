@@ -8,10 +8,11 @@
 //! planes, tested first, keep an equal t. So the result never depends on the order the
 //! hierarchy happens to visit triangles in, and every lane width finds the same hit.
 
+use super::accel::walk::{Visit, walk};
 use super::accel::{Rays, Slabs};
-use super::bvh::{Bvh, Node, Tri};
+use super::bvh::{Bvh, Tri, Tri32};
 use super::triangle::{barycentrics, triangle_hit};
-use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
+use crate::lanes::{Lanes, MAX_LANES, Mask, V3, single};
 use crate::scene::Placement;
 use glam::{DMat3, DVec3};
 use std::sync::Arc;
@@ -80,6 +81,36 @@ impl Instance {
         }
     }
 
+    /// Where each lane's triangle tests start, and how far along its ray that is: in f32
+    /// frames a ray from outside the box twice the size of the mesh's, about its centre c,
+    /// starts at the point of its line nearest c (t₀ = (c − o′)·d′ / d′·d′ when positive),
+    /// so the edge functions' rounding, which grows with the square of the distance from
+    /// the origin to a triangle, stays that of a ray from near the mesh (docs/spec/mesh.md).
+    /// Every triangle of the placement is tested from the same point: still watertight.
+    #[inline(always)]
+    fn start<V: Lanes>(&self, local: &Rays<V>) -> (V3<V>, Option<V>) {
+        if !single::<V>() {
+            return (local.origin, None);
+        }
+        let (o, d) = (local.origin, local.dir);
+        let g = V3::splat(self.bvh.centre) - o;
+        let e = V3::splat(self.bvh.extent);
+        let one = V::splat(1.0);
+        let outside =
+            g.x.copysign(one)
+                .gt(e.x)
+                .or(g.y.copysign(one).gt(e.y))
+                .or(g.z.copysign(one).gt(e.z));
+        let q = g.dot(d) / d.dot(d);
+        let t0 = V::select(outside.and(q.gt(V::splat(0.0))), q, V::splat(0.0));
+        (o + d * t0, Some(t0))
+    }
+
+    /// The placed box (padded), in the world.
+    pub fn placed_box(&self) -> (DVec3, DVec3) {
+        (self.min, self.max)
+    }
+
     /// The lanes of `active` whose ray enters this mesh's placed box before `limit`.
     #[inline(always)]
     pub(super) fn entered<V: Lanes>(&self, world: &Slabs<V>, limit: V, active: V::M) -> V::M {
@@ -90,69 +121,112 @@ impl Instance {
     #[inline(always)]
     pub fn nearest<V: Lanes>(&self, rays: &Rays<V>, active: V::M, best: &mut Best<V>) {
         let local = self.local(rays);
-        let mut visit = NearestVisit {
-            rays: &local,
-            object: self.object,
-            best,
-        };
-        self.walk(&local, active, &mut visit);
+        let from = self.start(&local);
+        let object = self.object;
+        let tree = &self.bvh.tree;
+        // The triangles in the lanes' precision.
+        if single::<V>() {
+            let (rays, tris) = (&local, self.bvh.tris32());
+            let mut visit = NearestVisit {
+                rays,
+                from,
+                tris,
+                object,
+                best,
+            };
+            walk(tree, &local, active, &mut visit);
+        } else {
+            let (rays, tris) = (&local, self.bvh.tris());
+            let mut visit = NearestVisit {
+                rays,
+                from,
+                tris,
+                object,
+                best,
+            };
+            walk(tree, &local, active, &mut visit);
+        }
     }
 
     /// The lanes of `open` whose ray meets a triangle strictly before `max_t`.
     #[inline(always)]
     pub fn blocked<V: Lanes>(&self, rays: &Rays<V>, max_t: V, open: V::M) -> V::M {
         let local = self.local(rays);
-        let mut visit = AnyVisit {
-            rays: &local,
-            max_t,
-            blocked: V::M::none_set(),
-        };
-        self.walk(&local, open, &mut visit);
-        visit.blocked
-    }
-
-    /// Visits the leaves whose boxes a lane of `lanes` enters before its limit, nearer child
-    /// first (as the first lane sees them).
-    #[inline(always)]
-    fn walk<V: Lanes, S: Visit<V>>(&self, rays: &Rays<V>, lanes: V::M, visit: &mut S) {
-        let slabs = Slabs::new(rays, lanes);
-        let lead = lanes.bits().trailing_zeros() as usize;
-        let backwards = [
-            rays.dir.x.lane(lead) < 0.0,
-            rays.dir.y.lane(lead) < 0.0,
-            rays.dir.z.lane(lead) < 0.0,
-        ];
-        let nodes: &[Node] = &self.bvh.nodes;
-        let mut stack = [0u32; STACK];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let at = stack[top];
-            let node = &nodes[at as usize];
-            let open = visit.open(lanes);
-            let enter = slabs.enters(node.min, node.max, visit.limit()).and(open);
-            if !enter.any() {
-                continue;
-            }
-            if node.count > 0 {
-                let first = node.first as usize;
-                visit.leaf(&self.bvh.tris[first..first + node.count as usize], enter);
-                continue;
-            }
-            let (near, far) = if backwards[node.axis as usize] {
-                (node.first, at + 1)
-            } else {
-                (at + 1, node.first)
+        let from = self.start(&local);
+        let blocked = V::M::none_set();
+        let tree = &self.bvh.tree;
+        if single::<V>() {
+            let (rays, tris) = (&local, self.bvh.tris32());
+            let mut visit = AnyVisit {
+                rays,
+                from,
+                tris,
+                max_t,
+                blocked,
             };
-            stack[top] = far;
-            stack[top + 1] = near;
-            top += 2;
+            walk(tree, &local, open, &mut visit);
+            visit.blocked
+        } else {
+            let (rays, tris) = (&local, self.bvh.tris());
+            let mut visit = AnyVisit {
+                rays,
+                from,
+                tris,
+                max_t,
+                blocked,
+            };
+            walk(tree, &local, open, &mut visit);
+            visit.blocked
         }
     }
 }
 
-/// The deepest walk: the hierarchy is at most `bvh::MAX_DEPTH` levels deep.
-const STACK: usize = super::bvh::MAX_DEPTH + 2;
+/// A stored triangle, in either precision: its vertices and normal as lanes, and its index.
+pub(super) trait Stored: Copy {
+    fn lanes<V: Lanes>(&self) -> ([V3<V>; 3], V3<V>);
+    fn id(&self) -> u32;
+}
+
+impl Stored for Tri {
+    #[inline(always)]
+    fn lanes<V: Lanes>(&self) -> ([V3<V>; 3], V3<V>) {
+        // Written out: a closure (`map`) is compiled outside the kernel's target feature.
+        let v = &self.v;
+        (
+            [V3::splat(v[0]), V3::splat(v[1]), V3::splat(v[2])],
+            V3::splat(self.n),
+        )
+    }
+    #[inline(always)]
+    fn id(&self) -> u32 {
+        self.id
+    }
+}
+
+impl Stored for Tri32 {
+    #[inline(always)]
+    fn lanes<V: Lanes>(&self) -> ([V3<V>; 3], V3<V>) {
+        let v = &self.v;
+        (
+            [splat32(v[0]), splat32(v[1]), splat32(v[2])],
+            splat32(self.n),
+        )
+    }
+    #[inline(always)]
+    fn id(&self) -> u32 {
+        self.id
+    }
+}
+
+/// Lanes of an f32 vector (exact in either precision).
+#[inline(always)]
+fn splat32<V: Lanes>(a: [f32; 3]) -> V3<V> {
+    V3 {
+        x: V::splat(f64::from(a[0])),
+        y: V::splat(f64::from(a[1])),
+        z: V::splat(f64::from(a[2])),
+    }
+}
 
 /// A matrix times lanes of vectors, each row as ((a·x + b·y) + c·z).
 #[inline(always)]
@@ -170,20 +244,16 @@ fn row<V: Lanes>(r: DVec3, v: V3<V>) -> V {
     V::splat(r.x) * v.x + V::splat(r.y) * v.y + V::splat(r.z) * v.z
 }
 
-/// What a walk does at a leaf, and which lanes still search and how far.
-trait Visit<V: Lanes> {
-    fn open(&self, lanes: V::M) -> V::M;
-    fn limit(&self) -> V;
-    fn leaf(&mut self, tris: &[Tri], enter: V::M);
-}
-
-struct NearestVisit<'a, V: Lanes> {
+struct NearestVisit<'a, V: Lanes, T: Stored> {
     rays: &'a Rays<V>,
+    tris: &'a [T],
+    /// Where the triangle tests start (`Instance::start`).
+    from: (V3<V>, Option<V>),
     object: u32,
     best: &'a mut Best<V>,
 }
 
-impl<V: Lanes> Visit<V> for NearestVisit<'_, V> {
+impl<V: Lanes, T: Stored> Visit<V> for NearestVisit<'_, V, T> {
     #[inline(always)]
     fn open(&self, lanes: V::M) -> V::M {
         lanes
@@ -195,17 +265,17 @@ impl<V: Lanes> Visit<V> for NearestVisit<'_, V> {
     }
 
     #[inline(always)]
-    fn leaf(&mut self, tris: &[Tri], enter: V::M) {
+    fn leaf(&mut self, _: &Slabs<V>, first: usize, count: usize, enter: V::M) {
         let best = &mut *self.best;
-        for tri in tris {
-            let (hit, t, w) = hit(tri, self.rays, enter);
+        for tri in &self.tris[first..first + count] {
+            let (hit, t, w) = hit(tri, self.rays, self.from, enter);
             if !hit.any() {
                 continue;
             }
             let mut better = hit.and(t.lt(best.t));
             let tie = hit.and(t.eq(best.t));
             if tie.any() {
-                better = better.or(ties_won(tie, self.object, tri.id, best));
+                better = better.or(ties_won(tie, self.object, tri.id(), best));
             }
             if better.any() {
                 let (u, v) = barycentrics(w);
@@ -215,7 +285,7 @@ impl<V: Lanes> Visit<V> for NearestVisit<'_, V> {
                 best.v = V::select(better, v, best.v);
                 let mut bits = better.bits();
                 while bits != 0 {
-                    best.prim[bits.trailing_zeros() as usize] = tri.id;
+                    best.prim[bits.trailing_zeros() as usize] = tri.id();
                     bits &= bits - 1;
                 }
             }
@@ -223,13 +293,15 @@ impl<V: Lanes> Visit<V> for NearestVisit<'_, V> {
     }
 }
 
-struct AnyVisit<'a, V: Lanes> {
+struct AnyVisit<'a, V: Lanes, T: Stored> {
     rays: &'a Rays<V>,
+    tris: &'a [T],
+    from: (V3<V>, Option<V>),
     max_t: V,
     blocked: V::M,
 }
 
-impl<V: Lanes> Visit<V> for AnyVisit<'_, V> {
+impl<V: Lanes, T: Stored> Visit<V> for AnyVisit<'_, V, T> {
     #[inline(always)]
     fn open(&self, lanes: V::M) -> V::M {
         lanes.andnot(self.blocked)
@@ -241,10 +313,10 @@ impl<V: Lanes> Visit<V> for AnyVisit<'_, V> {
     }
 
     #[inline(always)]
-    fn leaf(&mut self, tris: &[Tri], enter: V::M) {
+    fn leaf(&mut self, _: &Slabs<V>, first: usize, count: usize, enter: V::M) {
         let mut enter = enter;
-        for tri in tris {
-            let (hit, t, _) = hit(tri, self.rays, enter);
+        for tri in &self.tris[first..first + count] {
+            let (hit, t, _) = hit(tri, self.rays, self.from, enter);
             let b = hit.and(t.lt(self.max_t));
             self.blocked = self.blocked.or(b);
             enter = enter.andnot(b);
@@ -257,13 +329,14 @@ impl<V: Lanes> Visit<V> for AnyVisit<'_, V> {
 
 /// `triangle_hit` of one stored triangle for the packet in mesh coordinates.
 #[inline(always)]
-fn hit<V: Lanes>(tri: &Tri, rays: &Rays<V>, enter: V::M) -> (V::M, V, [V; 3]) {
-    let v = [
-        V3::splat(tri.v[0]),
-        V3::splat(tri.v[1]),
-        V3::splat(tri.v[2]),
-    ];
-    triangle_hit(v, V3::splat(tri.n), rays.origin, rays.dir, enter)
+fn hit<V: Lanes, T: Stored>(
+    tri: &T,
+    rays: &Rays<V>,
+    (from, skipped): (V3<V>, Option<V>),
+    enter: V::M,
+) -> (V::M, V, [V; 3]) {
+    let (v, n) = tri.lanes();
+    triangle_hit(v, n, from, rays.dir, skipped, enter)
 }
 
 /// The lanes of `tie` (same t as the best so far) where triangle `id` of `object` comes first:

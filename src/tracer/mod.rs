@@ -21,6 +21,7 @@ pub mod precision;
 mod rows;
 pub mod sample;
 pub mod shade;
+pub mod sky;
 pub mod sobol;
 pub mod texture;
 mod triangle;
@@ -78,7 +79,9 @@ impl World {
         let opaque = (!clear.is_empty()).then(|| {
             accel::Geometry::subset(&scene.objects, &bvhs, |i| !material(i).transparent())
         });
-        let textured = scene.materials.iter().any(|m| m.textured());
+        // An image sky is filtered by the rays' footprints too.
+        let textured = scene.materials.iter().any(|m| m.textured())
+            || matches!(scene.sky, Some(crate::scene::Sky::Image { .. }));
         let mut world = World {
             branches: scene.materials.iter().any(|m| m.branches()),
             area_lights: scene.lights.iter().any(|l| l.area_samples().is_some()),

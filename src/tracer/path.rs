@@ -8,6 +8,7 @@ use super::World;
 use super::accel::{FromOrigin, Rays};
 use super::intersect::Ray;
 use super::shade::{NEGLIGIBLE_WEIGHT, shade_hit};
+use super::sky::Background;
 use super::texture::{self, Cone};
 use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
 use glam::DVec3;
@@ -76,7 +77,7 @@ fn follow<V: Lanes>(world: &World, eye: &Eye<V>, max_depth: u32, rays: &mut u64)
     if world.branches {
         return super::glass::trace_tree(world, eye, max_depth, rays);
     }
-    let background = V3::splat(world.scene.background);
+    let background = Background::of(world);
     let mut ray = eye.rays;
     let mut active = eye.active;
     let mut color = V3::zero();
@@ -95,7 +96,14 @@ fn follow<V: Lanes>(world: &World, eye: &Eye<V>, max_depth: u32, rays: &mut u64)
         let hit = world.geometry.nearest(&ray, from_origin, active);
         let missed = active.andnot(hit.hit);
         if missed.any() && !(depth == 0 && eye.transparent) {
-            color = V3::select(missed, color + background * weight, color);
+            // `match`, not `Option::map`, as for `cone` above.
+            #[allow(clippy::manual_map)]
+            let spread = match &cone {
+                Some(c) => Some(c.spread),
+                None => None,
+            };
+            let seen = background.seen(&ray.dir, missed, spread);
+            color = V3::select(missed, color + seen * weight, color);
         }
         active = hit.hit;
         if depth == 0 {

@@ -12,11 +12,14 @@ use super::accel::{Nearest, Rays};
 use super::mesh::NO_TRIANGLE;
 use super::shade::Lift;
 use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
-use crate::scene::{MeshShading, Shape};
+use crate::scene::{MeshShading, Placement, Shape};
 use glam::DVec3;
 
-/// What shading needs about the lanes that hit a triangle.
-pub(super) struct MeshLanes<V: Lanes> {
+/// What shading needs about the lanes that hit a triangle. The stations of `gouraud` and
+/// `constant` lanes (their placed corners and corner normals) are worked out only when
+/// shading asks for them: most meshes are lit at the hit.
+pub(super) struct MeshLanes<'w, V: Lanes> {
+    world: &'w World,
     pub is_mesh: V::M,
     /// Unit geometric normal (v1 − v0) × (v2 − v0) placed in the world, turned to the side
     /// the interpolated vertex normal points to (the outside).
@@ -27,9 +30,8 @@ pub(super) struct MeshLanes<V: Lanes> {
     pub delta: V,
     gouraud: V::M,
     constant: V::M,
-    corners: [[DVec3; MAX_LANES]; 3],
-    corner_normals: [[DVec3; MAX_LANES]; 3],
-    weights: [[f64; MAX_LANES]; 3],
+    /// Each lane's (object, triangle, u, v), for the stations.
+    at: [(usize, u32, f64, f64); MAX_LANES],
 }
 
 /// Secondary rays from a mesh start δ = 64·u·(‖p‖∞ + t) off the hit along the geometric
@@ -49,13 +51,14 @@ pub(super) fn roundoff<V: Lanes>() -> f64 {
     }
 }
 
-impl<V: Lanes> MeshLanes<V> {
+impl<'w, V: Lanes> MeshLanes<'w, V> {
     /// The mesh lanes of `hit` (None when no lane hit a triangle).
     #[inline(always)]
-    pub(super) fn of(world: &World, hit: &Nearest<V>, point: V3<V>) -> Option<MeshLanes<V>> {
+    pub(super) fn of(world: &'w World, hit: &Nearest<V>, point: V3<V>) -> Option<MeshLanes<'w, V>> {
+        let hits = hit.hit.bits();
         let mut bits = 0u32;
         for k in 0..V::N {
-            if hit.hit.lane(k) && hit.prim[k] != NO_TRIANGLE {
+            if hits >> k & 1 == 1 && hit.prim[k] != NO_TRIANGLE {
                 bits |= 1 << k;
             }
         }
@@ -68,34 +71,50 @@ impl<V: Lanes> MeshLanes<V> {
             hit.u.array(),
             hit.v.array(),
         );
-        let mut out = [Lane::default(); MAX_LANES];
+        let (px, py, pz) = (point.x.array(), point.y.array(), point.z.array());
+        let mut at = [(0usize, NO_TRIANGLE, 0.0, 0.0); MAX_LANES];
+        // geom x, y, z, shade x, y, z, delta: one array per value, loaded into lanes once.
+        let mut out = [[0.0f64; MAX_LANES]; 7];
         let (mut gouraud, mut constant) = (0u32, 0u32);
         let u_lanes = roundoff::<V>();
-        for (k, lane) in out.iter_mut().enumerate().take(V::N) {
-            if bits >> k & 1 == 0 {
-                continue;
+        let mut rest = bits;
+        while rest != 0 {
+            let k = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            at[k] = (objects[k] as usize, hit.prim[k], u[k], v[k]);
+            let p = DVec3::new(px[k], py[k], pz[k]);
+            let (geom, shade, shading) = normals(world, at[k]);
+            let delta = lift_distance(p, t[k], u_lanes);
+            for (i, x) in [geom.x, geom.y, geom.z, shade.x, shade.y, shade.z, delta]
+                .into_iter()
+                .enumerate()
+            {
+                out[i][k] = x;
             }
-            let at = (objects[k] as usize, hit.prim[k], u[k], v[k]);
-            let shading;
-            (*lane, shading) = Lane::of(world, at, point.lane(k), t[k], u_lanes);
             match shading {
                 MeshShading::Gouraud => gouraud |= 1 << k,
                 MeshShading::Constant => constant |= 1 << k,
                 _ => {}
             }
         }
+        // Loads written out: a closure is compiled outside the kernel's target feature.
         Some(MeshLanes {
+            world,
             is_mesh: V::M::from_bits(bits),
-            geom: V3::from_fn(|k| out[k].geom),
-            shade: V3::from_fn(|k| out[k].shade),
-            delta: V::from_fn(|k| out[k].delta),
+            geom: V3 {
+                x: V::load(&out[0]),
+                y: V::load(&out[1]),
+                z: V::load(&out[2]),
+            },
+            shade: V3 {
+                x: V::load(&out[3]),
+                y: V::load(&out[4]),
+                z: V::load(&out[5]),
+            },
+            delta: V::load(&out[6]),
             gouraud: V::M::from_bits(gouraud),
             constant: V::M::from_bits(constant),
-            corners: std::array::from_fn(|i| std::array::from_fn(|k| out[k].corners[i])),
-            corner_normals: std::array::from_fn(|i| {
-                std::array::from_fn(|k| out[k].corner_normals[i])
-            }),
-            weights: std::array::from_fn(|i| std::array::from_fn(|k| out[k].weights[i])),
+            at,
         })
     }
 
@@ -137,13 +156,13 @@ impl<V: Lanes> MeshLanes<V> {
     pub(super) fn station(&self, station: usize, ray: &Rays<V>, lift: &Lift<V>) -> Station<V> {
         let (lanes, p, n) = if station < 3 {
             let back = self.geom.dot(ray.dir).gt(V::splat(0.0));
-            let p = V3::from_fn(|k| self.corners[station][k]);
-            let n = V3::from_fn(|k| self.corner_normals[station][k]);
+            let p = self.corner_lanes(self.gouraud, station, false);
+            let n = self.corner_lanes(self.gouraud, station, true);
             (self.gouraud, p, V3::select(back, -n, n))
         } else {
-            let c0 = V3::from_fn(|k| self.corners[0][k]);
-            let c1 = V3::from_fn(|k| self.corners[1][k]);
-            let c2 = V3::from_fn(|k| self.corners[2][k]);
+            let c0 = self.corner_lanes(self.constant, 0, false);
+            let c1 = self.corner_lanes(self.constant, 1, false);
+            let c2 = self.corner_lanes(self.constant, 2, false);
             (
                 self.constant,
                 (c0 + c1 + c2) * V::splat(1.0 / 3.0),
@@ -168,12 +187,36 @@ impl<V: Lanes> MeshLanes<V> {
     /// centroid's `lit[4]`.
     #[inline(always)]
     pub(super) fn mixed(&self, lit: &[V3<V>; 5]) -> V3<V> {
-        let w0 = V::from_fn(|k| self.weights[0][k]);
-        let w1 = V::from_fn(|k| self.weights[1][k]);
-        let w2 = V::from_fn(|k| self.weights[2][k]);
+        let mut w = [[0.0; MAX_LANES]; 3];
+        let mut bits = self.gouraud.bits();
+        while bits != 0 {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let (_, _, u, v) = self.at[k];
+            (w[0][k], w[1][k], w[2][k]) = (1.0 - u - v, u, v);
+        }
+        let (w0, w1, w2) = (V::load(&w[0]), V::load(&w[1]), V::load(&w[2]));
         let vertices = lit[1] * w0 + lit[2] * w1 + lit[3] * w2;
         let color = V3::select(self.gouraud, vertices, lit[0]);
         V3::select(self.constant, lit[4], color)
+    }
+
+    /// Corner `i` of the hit triangles placed, or its normal placed, on `lanes` (0 elsewhere).
+    #[inline(always)]
+    fn corner_lanes(&self, lanes: V::M, i: usize, normal: bool) -> V3<V> {
+        let mut out = [[0.0; MAX_LANES]; 3];
+        let mut bits = lanes.bits();
+        while bits != 0 {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let x = corner(self.world, self.at[k], i, normal);
+            (out[0][k], out[1][k], out[2][k]) = (x.x, x.y, x.z);
+        }
+        V3 {
+            x: V::load(&out[0]),
+            y: V::load(&out[1]),
+            z: V::load(&out[2]),
+        }
     }
 
     /// δ for rays leaving `p` (a vertex or the centroid) of the hit triangles; 0 off meshes.
@@ -197,61 +240,67 @@ pub(super) struct Station<V: Lanes> {
     pub lift: Lift<V>,
 }
 
-/// One lane's values while they are gathered.
-#[derive(Clone, Copy, Default)]
-struct Lane {
-    geom: DVec3,
-    shade: DVec3,
-    delta: f64,
-    corners: [DVec3; 3],
-    corner_normals: [DVec3; 3],
-    weights: [f64; 3],
+/// The placement, file positions and normals of triangle `prim` of mesh object `object`.
+fn triangle(
+    world: &World,
+    object: usize,
+    prim: u32,
+) -> (Placement, [DVec3; 3], [DVec3; 3], MeshShading) {
+    let scene = &world.scene;
+    let Shape::Mesh {
+        mesh,
+        place,
+        shading,
+    } = scene.objects[object].shape
+    else {
+        unreachable!("a triangle hit on an object that is not a mesh");
+    };
+    let m = &scene.meshes[mesh];
+    let tri = m.triangles[prim as usize];
+    (
+        place,
+        tri.map(|i| m.positions[i as usize]),
+        tri.map(|i| m.normals[i as usize]),
+        shading,
+    )
 }
 
-impl Lane {
-    /// The values of one lane that hit triangle `prim` of object `object` at barycentrics
-    /// (u, v), point `p` and distance `t`. Scalar f64 code, compiled once for every kernel.
-    #[inline(never)]
-    fn of(
-        world: &World,
-        (object, prim, u, v): (usize, u32, f64, f64),
-        p: DVec3,
-        t: f64,
-        roundoff: f64,
-    ) -> (Lane, MeshShading) {
-        let scene = &world.scene;
-        let Shape::Mesh {
-            mesh,
-            place,
-            shading,
-        } = scene.objects[object].shape
-        else {
-            unreachable!("a triangle hit on an object that is not a mesh");
-        };
-        let m = &scene.meshes[mesh];
-        let tri = m.triangles[prim as usize];
-        let q = tri.map(|i| m.positions[i as usize]);
-        let n = tri.map(|i| m.normals[i as usize]);
-        let b = [1.0 - u - v, u, v];
-        let wound = place.normal((q[1] - q[0]).cross(q[2] - q[0]));
-        let smooth = place.normal(n[0] * b[0] + n[1] * b[1] + n[2] * b[2]);
-        // The vertex normals say which side is out (a file may wind its faces either way).
-        let geom = if wound.dot(smooth) < 0.0 {
-            -wound
-        } else {
-            wound
-        };
-        let lane = Lane {
-            geom,
-            shade: match shading {
-                MeshShading::Phong | MeshShading::Gouraud => smooth,
-                MeshShading::Flat | MeshShading::Constant => geom,
-            },
-            delta: lift_distance(p, t, roundoff),
-            corners: q.map(|x| place.point(x)),
-            corner_normals: n.map(|x| place.normal(x)),
-            weights: b,
-        };
-        (lane, shading)
+/// The geometric and shading normals of one lane that hit triangle `prim` of `object` at
+/// barycentrics (u, v), and the object's shading model. Scalar f64 code, compiled once for
+/// every kernel.
+#[inline(never)]
+fn normals(
+    world: &World,
+    (object, prim, u, v): (usize, u32, f64, f64),
+) -> (DVec3, DVec3, MeshShading) {
+    let (place, q, n, shading) = triangle(world, object, prim);
+    let b = [1.0 - u - v, u, v];
+    let wound = place.normal((q[1] - q[0]).cross(q[2] - q[0]));
+    let smooth = place.normal(n[0] * b[0] + n[1] * b[1] + n[2] * b[2]);
+    // The vertex normals say which side is out (a file may wind its faces either way).
+    let geom = if wound.dot(smooth) < 0.0 {
+        -wound
+    } else {
+        wound
+    };
+    let shade = match shading {
+        MeshShading::Phong | MeshShading::Gouraud => smooth,
+        MeshShading::Flat | MeshShading::Constant => geom,
+    };
+    (geom, shade, shading)
+}
+
+/// Corner `i` of one lane's triangle placed, or (`normal`) its vertex normal placed.
+#[inline(never)]
+fn corner(
+    world: &World,
+    (object, prim, _, _): (usize, u32, f64, f64),
+    i: usize,
+    normal: bool,
+) -> DVec3 {
+    let (place, q, n, _) = triangle(world, object, prim);
+    match normal {
+        false => place.point(q[i]),
+        true => place.normal(n[i]),
     }
 }

@@ -346,21 +346,29 @@ fn image_color(scene: &Scene, image: &Image, scale: DVec2, at: &At, tap: &Tap) -
     if !(u.is_finite() && v.is_finite()) {
         return mean(&image.levels[last]);
     }
+    trilinear(image, texels, |level| bilinear(level, u, v))
+}
+
+/// `sample` of the two mip levels around log2 of a footprint `texels` level-0 texels wide,
+/// blended by the fraction: the level and blend rule of docs/spec/texture.md (image lookups
+/// and the sky).
+pub(super) fn trilinear(image: &Image, texels: f64, sample: impl Fn(&Level) -> DVec3) -> DVec3 {
+    let last = image.levels.len() - 1;
     let lod = if texels > 1.0 {
         libm::log2(texels)
     } else {
         0.0
     };
     if lod.is_nan() || lod >= last as f64 {
-        return bilinear(&image.levels[last], u, v);
+        return sample(&image.levels[last]);
     }
     let l = lod.floor();
     let f = lod - l;
-    let c = bilinear(&image.levels[l as usize], u, v);
+    let c = sample(&image.levels[l as usize]);
     if f == 0.0 {
         return c;
     }
-    c * (1.0 - f) + bilinear(&image.levels[l as usize + 1], u, v) * f
+    c * (1.0 - f) + sample(&image.levels[l as usize + 1]) * f
 }
 
 /// Bilinear interpolation at (u, v) repeated: texel (i, j)'s centre is at

@@ -34,13 +34,16 @@ pub fn cross<V: Lanes>(a: V3<V>, b: V3<V>) -> V3<V> {
 }
 
 /// Which lanes of `active` meet the triangle `v` (normal `n` = (v1 − v0) × (v2 − v0)) at
-/// 0 < t < ∞: the mask, t, and the edge functions (w0, w1, w2) for the barycentrics.
+/// 0 < t < ∞: the mask, t, and the edge functions (w0, w1, w2) for the barycentrics. With
+/// `skipped` (f32 frames), the test runs from a point that far along the ray: t is that plus
+/// the test's own distance.
 #[inline(always)]
 pub fn triangle_hit<V: Lanes>(
     v: [V3<V>; 3],
     n: V3<V>,
     origin: V3<V>,
     d: V3<V>,
+    skipped: Option<V>,
     active: V::M,
 ) -> (V::M, V, [V; 3]) {
     let zero = V::splat(0.0);
@@ -55,6 +58,10 @@ pub fn triangle_hit<V: Lanes>(
         return (inside, zero, [zero; 3]);
     }
     let t = a.dot(n) / d.dot(n);
+    let t = match skipped {
+        Some(t0) => t0 + t,
+        None => t,
+    };
     // t > 0 and finite; NaN (a ray in the triangle's plane: 0/0) compares false.
     let ahead = t.gt(zero).and(t.lt(V::splat(f64::INFINITY)));
     (inside.and(ahead), t, [w0, w1, w2])
@@ -80,6 +87,7 @@ mod tests {
             V3::splat(n),
             V3::splat(o),
             V3::splat(d),
+            None,
             true,
         );
         h.then_some(t.0)

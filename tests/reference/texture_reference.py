@@ -5,7 +5,8 @@
 # width at a hit, reflection and transmission updates), the footprint ellipse and its taps,
 # snapping, the checker's box filter, PNG decoding (8 and 16 bits, grey, RGB, palette), the
 # binary32 mip pyramid, texture coordinates of planes (default u axis and `u_axis`), spheres and
-# OBJ meshes (`vt`), the trilinear lookup and the replacement of diffuse and ambient.
+# OBJ meshes (`vt`), the trilinear lookup and the replacement of diffuse and ambient, and the
+# sky (a gradient, or an equirectangular image by direction and footprint) seen by every miss.
 # Same limits as mesh_reference.py (encoding linear, f64, no adaptive sampling, no alpha), except
 # that n² stratified samples a pixel are traced (tracer.md "Sample offsets", frame 0).
 #
@@ -190,6 +191,55 @@ def image_lookup(levels, scale, u, v, F):
     return tuple(c[i] * (1.0 - f) + c1[i] * f for i in range(3))
 
 
+# ---------------------------------------------------------------- the sky (texture.md "The sky")
+TAU = 6.283185307179586
+
+def sky_bilinear(level, u, v):
+    """The sky's bilinear rule: repeating along u, rows clamped."""
+    h, w = level.shape[:2]
+    x = (u - ffloor(u)) * float(w) - 0.5
+    y = (1.0 - v) * float(h) - 0.5
+    x0 = ffloor(x); y0 = ffloor(y); fx = x - x0; fy = y - y0
+    i0 = int(x0) % w; i1 = (i0 + 1) % w
+    j0 = min(max(int(y0), 0), h - 1); j1 = min(max(int(y0 + 1.0), 0), h - 1)
+    T = lambda i, j: [float(c) for c in level[j, i]]
+    t00, t10, t01, t11 = T(i0, j0), T(i1, j0), T(i0, j1), T(i1, j1)
+    return tuple((t00[c] * (1.0 - fx) + t10[c] * fx) * (1.0 - fy) + (t01[c] * (1.0 - fx) + t11[c] * fx) * fy
+                 for c in range(3))
+
+def sky_seen(sky, d, s):
+    """What a ray of direction d (any length) and cone spread s sees of `sky`."""
+    if sky[0] == 'gradient':
+        _, Z, Hc, G = sky
+        y = fdiv(d[1], math.sqrt((d[0] * d[0] + d[1] * d[1]) + d[2] * d[2]))
+        if not math.isfinite(y):
+            return Hc
+        a, C = (y, Z) if y >= 0 else (-y, G)
+        return tuple(Hc[c] * (1.0 - a) + C[c] * a for c in range(3))
+    _, levels, R, K = sky
+    phi = libm('atan2', d[0], -d[2])
+    rho = math.sqrt(d[0] * d[0] + d[2] * d[2])
+    theta = libm('atan2', d[1], rho)
+    u = (phi / TAU + 0.5) + R / 360.0
+    v = theta / math.pi + 0.5
+    L = len(levels)
+    if not (math.isfinite(u) and math.isfinite(v)):
+        c = tuple(float(x) for x in levels[L - 1][0, 0])
+    else:
+        Th, Tw = levels[0].shape[:2]
+        F = abs(s) * fmax(float(Tw) / TAU, float(Th) / math.pi)
+        lam = libm('log2', F) if F > 1 else 0.0
+        if not (lam < L - 1):
+            c = sky_bilinear(levels[L - 1], u, v)
+        else:
+            l = ffloor(lam); f = lam - l
+            c = sky_bilinear(levels[int(l)], u, v)
+            if f != 0:
+                c1 = sky_bilinear(levels[int(l) + 1], u, v)
+                c = tuple(c[i] * (1.0 - f) + c1[i] * f for i in range(3))
+    return tuple(x * K for x in c)
+
+
 # ---------------------------------------------------------------- checker (texture.md "Checker")
 def sgn(k):
     return 1.0 if k - 2.0 * ffloor(k / 2.0) == 0 else -1.0
@@ -226,7 +276,10 @@ mr.MeshFile = TexMeshFile
 
 class TexScene(mr.Scene):
     def __init__(self, d):
-        super().__init__(d)
+        if isinstance(d['render'].get('background'), dict):  # a sky: mesh_reference reads colours only
+            super().__init__(dict(d, render=dict(d['render'], background=[0, 0, 0])))
+        else:
+            super().__init__(d)
         for s in self.spheres:
             s['R'] = float(d['objects'][s['idx']]['sphere']['radius'])
         for p in self.planes:
@@ -243,6 +296,15 @@ class TexScene(mr.Scene):
             nz = [i for i in range(3) if N[i] != 0]
             p['snap'] = [(nz[0], p['p'][nz[0]])] if len(nz) == 1 else []
         self.textured_scene = any(o['m']['maps'] for o in self.spheres + self.planes + self.meshes)
+        bg = d['render'].get('background')
+        self.sky = None
+        if isinstance(bg, dict) and 'image' in bg:
+            levels = load_image(bg['image'], bg.get('encoding', 'srgb'))
+            self.sky = ('image', levels, float(bg.get('rotate', 0)), float(bg.get('intensity', 1)))
+        elif isinstance(bg, dict):
+            g = bg['gradient']
+            Hc = tuple(map(float, g['horizon']))
+            self.sky = ('gradient', tuple(map(float, g['zenith'])), Hc, tuple(map(float, g.get('ground', Hc))))
         # texture.md "Eye rays": ((2 · tan_half_fov) / width) / sqrt(samples)
         self.samples = int(d['render'].get('samples', 1))
         self.eye_spread = ((2.0 * self.s) / float(self.W)) / math.sqrt(float(self.samples))
@@ -421,6 +483,10 @@ class TexScene(mr.Scene):
         F = density * (2.0 * fmax(length(minor), length(bax)))
         return uv[0], uv[1], F
 
+    def seen(self, d, cs):
+        """A miss: the background colour, or the sky along d with the ray's cone spread."""
+        return self.bg if self.sky is None else sky_seen(self.sky, d, cs)
+
     # ---- a path with its cone (tracer.md "Path" + texture.md)
     def trace(self, o, d):
         colour = (0.0, 0.0, 0.0); w = 1.0; leaving = None
@@ -429,7 +495,7 @@ class TexScene(mr.Scene):
         for depth in range(self.max_depth):
             h = self.nearest(o, d, leaving)
             if h is None:
-                colour = add(colour, mr.smul(w, self.bg))
+                colour = add(colour, mr.smul(w, self.seen(d, cs)))
                 break
             t, kind, ob, extra = h
             P = add(o, mr.smul(t, d))
@@ -474,7 +540,7 @@ class TexScene(mr.Scene):
                 spent += 1
                 h = self.nearest(o, d, leaving)
                 if h is None:
-                    colour = add(colour, had(self.bg, w)); continue
+                    colour = add(colour, had(self.seen(d, cs), w)); continue
                 t, kind, ob, extra = h
                 P = add(o, mr.smul(t, d))
                 Wd = abs(cw + cs * t)
@@ -550,6 +616,9 @@ def make_textures():
     p = os.path.join(TEXDIR, 'rgba8.png')  # 37 × 23 8-bit RGBA (alpha ignored): six odd-sized mip levels
     if not os.path.exists(p):
         Image.fromarray(rng.randint(0, 256, (23, 37, 4)).astype(np.uint8), mode='RGBA').save(p)
+    p = os.path.join(TEXDIR, 'sky.png')  # 24 × 11 8-bit RGB (odd rows): an equirectangular sky
+    if not os.path.exists(p):
+        Image.fromarray(rng.randint(0, 256, (11, 24, 3)).astype(np.uint8)).save(p)
     p = os.path.join(TEXDIR, 'quad_vn.obj')  # vertex normals leaning to +x: a phong S that can face away from the ray
     if not os.path.exists(p):
         open(p, 'w').write('# a quad in y = 0 with texture coordinates and normals leaning to +x\n'
@@ -681,6 +750,21 @@ SCENES['exr'] = dict(scene([
     {'sphere': {'center': [0, 0, -2], 'radius': 1, 'material': 'float32'}},
     {'mesh': {'file': 'quad_uv.obj', 'material': 'half', 'shading': 'flat', 'translate': [2, 0, -3], 'rotate': [90, -30, 0]}},
 ], {'position': [0, 0.8, 3], 'look_at': [0, -0.3, -2], 'fov': 70}), materials=EXR_MATERIALS)
+
+# skies (texture.md "The sky"): an image sky turned and brightened, seen directly, in a mirror
+# sphere (the cone's spread grows: coarser levels), a mirror plane and through glass; a gradient
+def sky_scene(background, **kw):
+    d = scene([
+        {'plane': {'point': [0, -1, 0], 'normal': [0, 1, 0], 'material': 'clay'}},
+        {'sphere': {'center': [-1, 0, -1.5], 'radius': 0.9, 'material': 'mirror'}},
+        {'sphere': {'center': [1.1, -0.2, -1], 'radius': 0.7, 'material': 'glass'}},
+        {'plane': {'point': [0, 0, -9], 'normal': [0.3, 0.1, 1], 'material': 'mirror'}},
+    ], {'position': [0, 0.3, 3], 'look_at': [0, 0.6, -2], 'fov': 80}, max_depth=4, **kw)
+    d['render']['background'] = background
+    return d
+SCENES['sky_image'] = sky_scene({'image': 'sky.png', 'rotate': 30, 'intensity': 1.5})
+SCENES['sky_image_s4'] = sky_scene({'image': 'sky.png', 'rotate': -75.5}, w=40, h=24, samples=4)
+SCENES['sky_gradient'] = sky_scene({'gradient': {'zenith': [0.1, 0.2, 0.7], 'horizon': [0.9, 0.85, 0.8], 'ground': [0.2, 0.3, 0.1]}})
 
 # more samples: the eye cone narrows by sqrt(samples) (4: stratified 2 × 2, 9: 3 × 3)
 SCENES['checker_floor_s4'] = scene(SCENES['checker_floor']['objects'], SCENES['checker_floor']['camera'], w=48, h=27, samples=4)

@@ -131,8 +131,7 @@ fn finish(
         });
     }
     let face = area_weighted(&positions, &kept);
-    let file_normals =
-        normals.is_some() && has_normal.as_ref().is_none_or(|h| h.iter().all(|&b| b));
+    let mut file_normals = 0;
     let normals = match normals {
         Some(n) => n
             .iter()
@@ -141,6 +140,7 @@ fn finish(
                 let from_file = has_normal.as_ref().is_none_or(|h| h[i]);
                 let u = v.normalize_or_zero();
                 if from_file && u != DVec3::ZERO && u.is_finite() {
+                    file_normals += 1;
                     u
                 } else {
                     face[i]

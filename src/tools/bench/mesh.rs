@@ -15,7 +15,7 @@ use std::sync::Arc;
 /// One model in a scene of its own: a clay material, one point light, no floor (so frames
 /// cast exactly eye rays and one shadow ray per hit, as the Embree harness does).
 fn scene(
-    mesh: Mesh,
+    mesh: Arc<Mesh>,
     camera: &str,
     (w, h): (u32, u32),
     extra: &str,
@@ -32,7 +32,7 @@ camera: {camera}
 "
     );
     let mut seq = load(&text, (w, h))?;
-    seq.scene.meshes = vec![Arc::new(mesh)];
+    seq.scene.meshes = vec![mesh];
     seq.scene.objects = vec![Object {
         shape: Shape::Mesh {
             mesh: 0,
@@ -68,6 +68,7 @@ pub(super) fn meshes(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Resul
     ];
     for ((name, mesh), camera) in models.into_iter().zip(cameras) {
         let triangles = mesh.triangles.len();
+        let mesh = Arc::new(mesh);
         let build = repeat(o.runs, || {
             std::hint::black_box(Bvh::build(&mesh));
             Ok(())
@@ -112,7 +113,7 @@ fn against_talk(
     };
     let triangles = blob.triangles.len();
     let seq = scene(
-        blob,
+        Arc::new(blob),
         "{ position: [0.4, 0.6, 3.1], look_at: [0, 0, 0], fov: 45 }",
         size,
         "",

@@ -75,10 +75,10 @@ pub(super) fn title(img: &mut RgbImage, seq: &Sequence) {
         n => format!("{n} frames"),
     };
     let text = format!(
-        "{}: {frames} at {} fps ({:.2} s), {motion}",
+        "{}: {frames} at {} fps ({} s), {motion}",
         seq.name,
         fmt_num(t.fps),
-        t.frame_count as f64 / t.fps
+        t.running_time_text()
     );
     Canvas::whole(img).text(i64::from(MARGIN), i64::from(MARGIN), &text, 2, INK);
 }

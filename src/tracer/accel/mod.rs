@@ -19,7 +19,10 @@ use std::ops::Range;
 use std::sync::Arc;
 
 mod build;
+pub(crate) mod frustum;
 mod slabs;
+pub(crate) mod walk;
+pub(crate) mod wide;
 
 pub(crate) use slabs::Slabs;
 
@@ -35,7 +38,13 @@ pub struct Geometry {
     bvh: Vec<Node>,
     /// Placed meshes, tested after spheres and planes.
     meshes: Vec<Instance>,
+    /// The hierarchy over the placed meshes' boxes, when there are enough to need one.
+    top: Option<wide::Tree>,
 }
+
+/// From this many placed meshes a packet walks a hierarchy over them rather than testing
+/// each one's box.
+pub const TOP_MIN_MESHES: usize = 4;
 
 #[derive(Debug, Clone, Copy)]
 struct Ball {
@@ -139,11 +148,13 @@ impl Geometry {
             let n = spheres.len();
             build::build(&mut bvh, &mut spheres, 0, 0, n);
         }
+        let top = (meshes.len() >= TOP_MIN_MESHES).then(|| top_level(&meshes));
         Geometry {
             spheres,
             planes,
             bvh,
             meshes,
+            top,
         }
     }
 
@@ -185,6 +196,7 @@ impl Geometry {
             planes,
             bvh,
             meshes: self.meshes.iter().map(|m| m.shifted(by, pad)).collect(),
+            top: self.top.as_ref().map(|t| t.shifted(by, pad)),
         }
     }
 
@@ -257,7 +269,15 @@ impl Geometry {
             v: V::splat(0.0),
             prim: [NO_TRIANGLE; MAX_LANES],
         };
-        if !self.meshes.is_empty() {
+        if let Some(top) = &self.top {
+            let mut visit = TopNearest {
+                meshes: &self.meshes,
+                order: &top.order,
+                rays,
+                best: &mut best,
+            };
+            walk::walk(top, rays, active, &mut visit);
+        } else if !self.meshes.is_empty() {
             let slabs = Slabs::new(rays, active);
             for m in &self.meshes {
                 let enter = m.entered(&slabs, best.t, active);
@@ -279,6 +299,17 @@ impl Geometry {
     /// The lanes of `open` blocked by a mesh before `max_t`.
     #[inline(always)]
     fn mesh_blocked<V: Lanes>(&self, rays: &Rays<V>, max_t: V, open: V::M) -> V::M {
+        if let Some(top) = &self.top {
+            let mut visit = TopAny {
+                meshes: &self.meshes,
+                order: &top.order,
+                rays,
+                max_t,
+                blocked: V::M::none_set(),
+            };
+            walk::walk(top, rays, open, &mut visit);
+            return visit.blocked;
+        }
         let slabs = Slabs::new(rays, open);
         let mut blocked = V::M::none_set();
         for m in &self.meshes {
@@ -477,6 +508,83 @@ impl<V: Lanes> Search<V> for AnySearch<'_, V> {
             let blocked = hit.and(t.lt(self.max_t));
             open = open.andnot(blocked);
             self.open = self.open.andnot(blocked);
+        }
+    }
+}
+
+/// The hierarchy over placed meshes: each leaf item a placement, under its placed box.
+fn top_level(meshes: &[Instance]) -> wide::Tree {
+    let prims = meshes
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let (lo, hi) = m.placed_box();
+            wide::Prim::new(lo, hi, i as u32)
+        })
+        .collect();
+    wide::Tree::build(prims)
+}
+
+/// The top level's leaves for nearest hits: each placement whose box a lane enters walks its
+/// own hierarchy.
+struct TopNearest<'a, V: Lanes> {
+    meshes: &'a [Instance],
+    order: &'a [u32],
+    rays: &'a Rays<V>,
+    best: &'a mut Best<V>,
+}
+
+impl<V: Lanes> walk::Visit<V> for TopNearest<'_, V> {
+    #[inline(always)]
+    fn open(&self, lanes: V::M) -> V::M {
+        lanes
+    }
+
+    #[inline(always)]
+    fn limit(&self) -> V {
+        self.best.t
+    }
+
+    #[inline(always)]
+    fn leaf(&mut self, slabs: &Slabs<V>, first: usize, count: usize, enter: V::M) {
+        for &i in &self.order[first..first + count] {
+            let m = &self.meshes[i as usize];
+            let lanes = m.entered(slabs, self.best.t, enter);
+            if lanes.any() {
+                m.nearest(self.rays, lanes, self.best);
+            }
+        }
+    }
+}
+
+/// The top level's leaves for shadow rays: lanes stop at the first placement that blocks them.
+struct TopAny<'a, V: Lanes> {
+    meshes: &'a [Instance],
+    order: &'a [u32],
+    rays: &'a Rays<V>,
+    max_t: V,
+    blocked: V::M,
+}
+
+impl<V: Lanes> walk::Visit<V> for TopAny<'_, V> {
+    #[inline(always)]
+    fn open(&self, lanes: V::M) -> V::M {
+        lanes.andnot(self.blocked)
+    }
+
+    #[inline(always)]
+    fn limit(&self) -> V {
+        self.max_t
+    }
+
+    #[inline(always)]
+    fn leaf(&mut self, slabs: &Slabs<V>, first: usize, count: usize, enter: V::M) {
+        for &i in &self.order[first..first + count] {
+            let m = &self.meshes[i as usize];
+            let lanes = m.entered(slabs, self.max_t, enter.andnot(self.blocked));
+            if lanes.any() {
+                self.blocked = self.blocked.or(m.blocked(self.rays, self.max_t, lanes));
+            }
         }
     }
 }

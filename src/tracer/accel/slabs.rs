@@ -1,6 +1,6 @@
 //! The slab test a packet's walk shares between its boxes.
 
-use super::{Node, Rays};
+use super::{Node, Rays, wide};
 use crate::lanes::{Lanes, Mask, V3};
 use glam::DVec3;
 
@@ -36,10 +36,26 @@ impl<V: Lanes> Slabs<V> {
         }
     }
 
+    /// Each axis's origins, reciprocal directions and direction (see `backwards`).
+    #[inline(always)]
+    pub(crate) fn parts(&self) -> ([V; 3], [V; 3], [Option<bool>; 3]) {
+        let (o, i) = (self.origin, self.inv);
+        ([o.x, o.y, o.z], [i.x, i.y, i.z], self.backwards)
+    }
+
     /// The lanes whose ray enters the node's box at or before their `limit`.
     #[inline(always)]
     pub(super) fn entry(&self, node: &Node, limit: V) -> V::M {
         self.enters(node.min, node.max, limit)
+    }
+
+    /// The lanes whose ray enters child `c`'s box of a wide node at or before their `limit`.
+    #[inline(always)]
+    pub(crate) fn enters_f32(&self, n: &wide::Node, c: usize, limit: V) -> V::M {
+        let at = |a: &[[f32; wide::WIDTH]; 3]| {
+            DVec3::new(a[0][c].into(), a[1][c].into(), a[2][c].into())
+        };
+        self.enters(at(&n.lo), at(&n.hi), limit)
     }
 
     /// The lanes whose ray enters the box [min, max] at or before their `limit`.

@@ -1,0 +1,173 @@
+//! One box test for a whole packet: the intervals its origins and reciprocal directions span
+//! on each axis bound every lane's slab distances, so a wide node's children are culled for
+//! the packet at once (interval arithmetic, as in Wald, Boulos and Shirley's "Ray tracing
+//! deformable scenes using dynamic bounding volume hierarchies"), and only leaves are tested
+//! lane by lane.
+//!
+//! Why it never culls a box a lane would enter: a lane enters when
+//! max(x₀, y₀, z₀, 0) ≤ min(x₁, y₁, z₁, limit) (`Slabs::enters`), each x₀ = fl(fl(p − o)·i)
+//! for the box's entry plane p, its origin o and reciprocal direction i. Rounding is
+//! monotone, so fl(fl(p − o)·i) moves the same way as (p − o)·i when o or i moves alone; the
+//! product is bilinear, so over the box [o_lo, o_hi] × [i_lo, i_hi] both its exact and its
+//! rounded values are smallest (and largest) at a corner. The corners' least entry and
+//! greatest exit, computed with the same operations in the same precision, therefore bound
+//! every lane's, and max and min keep the order: the packet's test passes whenever a lane's
+//! does (with the same f32 slack as the lanes' test).
+
+use super::Slabs;
+use super::wide::{Node, WIDTH};
+use crate::lanes::{Lanes, Mask};
+use std::ops::{Mul, Sub};
+
+/// The float the lanes compute in: f32 or f64.
+pub(crate) trait Real: Copy + PartialOrd + Sub<Output = Self> + Mul<Output = Self> {
+    const ZERO: Self;
+    fn of(x: f64) -> Self;
+    fn of_f32(x: f32) -> Self;
+    fn wide(self) -> f64;
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        if self < o { self } else { o }
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        if self > o { self } else { o }
+    }
+}
+
+impl Real for f32 {
+    const ZERO: f32 = 0.0;
+    #[inline(always)]
+    fn of(x: f64) -> f32 {
+        x as f32
+    }
+    #[inline(always)]
+    fn of_f32(x: f32) -> f32 {
+        x
+    }
+    #[inline(always)]
+    fn wide(self) -> f64 {
+        f64::from(self)
+    }
+}
+
+impl Real for f64 {
+    const ZERO: f64 = 0.0;
+    #[inline(always)]
+    fn of(x: f64) -> f64 {
+        x
+    }
+    #[inline(always)]
+    fn of_f32(x: f32) -> f64 {
+        f64::from(x)
+    }
+    #[inline(always)]
+    fn wide(self) -> f64 {
+        self
+    }
+}
+
+/// A packet's bounds per axis: its origins' and reciprocal directions' least and greatest
+/// values, and whether it runs backwards (every direction negative) along the axis.
+pub(crate) struct Frustum<R: Real> {
+    origin: [(R, R); 3],
+    inv: [(R, R); 3],
+    backwards: [bool; 3],
+    less: R,
+    more: R,
+}
+
+impl<R: Real> Frustum<R> {
+    /// The bounds of the `lanes` of `slabs`; None when on some axis they run both ways (the
+    /// intervals would then span everything and cull nothing).
+    #[inline(always)]
+    pub(crate) fn new<V: Lanes>(slabs: &Slabs<V>, lanes: V::M) -> Option<Frustum<R>> {
+        let (origin, inv, backwards) = slabs.parts();
+        let mut f = Frustum {
+            origin: [(R::ZERO, R::ZERO); 3],
+            inv: [(R::ZERO, R::ZERO); 3],
+            backwards: [false; 3],
+            less: R::of(1.0 - V::BOX_SLACK),
+            more: R::of(1.0 + V::BOX_SLACK),
+        };
+        for axis in 0..3 {
+            f.backwards[axis] = backwards[axis]?;
+            f.origin[axis] = range(origin[axis], lanes);
+            f.inv[axis] = range(inv[axis], lanes);
+        }
+        Some(f)
+    }
+
+    /// Whether the packet is narrow next to the box [lo, hi] it is about to walk: its origins
+    /// and the spread of its directions over the distance to the box's far side stay within
+    /// an eighth of the box's size. A wide packet's intervals would let every lane test the
+    /// union of every lane's boxes; the lanes' own tests are then cheaper (a heuristic: it
+    /// changes what is tested, never what is hit).
+    #[inline(always)]
+    pub(crate) fn narrow(&self, lo: glam::Vec3, hi: glam::Vec3) -> bool {
+        let (mut spread, mut scale, mut origins, mut far, mut size) =
+            (0.0, 0.0, 0.0f64, 0.0f64, 0.0f64);
+        for a in 0..3 {
+            let (o0, o1) = (self.origin[a].0.wide(), self.origin[a].1.wide());
+            let (d0, d1) = (1.0 / self.inv[a].1.wide(), 1.0 / self.inv[a].0.wide());
+            spread += (d1 - d0).abs();
+            scale += d0.abs().max(d1.abs());
+            origins = origins.max(o1 - o0);
+            let mid = 0.5 * (o0 + o1);
+            let (l, h) = (f64::from(lo[a]), f64::from(hi[a]));
+            far = far.max((h - mid).abs().max((l - mid).abs()));
+            size = size.max(h - l);
+        }
+        origins + spread / scale * far <= size / 8.0
+    }
+
+    /// Which children of `node` some lane may enter at or before `limit` (the greatest of
+    /// the lanes' limits), and each one's least entry distance.
+    #[inline(always)]
+    pub(crate) fn children(&self, node: &Node, limit: R) -> (u32, [R; WIDTH]) {
+        let mut near = [R::ZERO; WIDTH];
+        let mut far = [limit; WIDTH];
+        for axis in 0..3 {
+            let (entry, exit) = match self.backwards[axis] {
+                false => (&node.lo[axis], &node.hi[axis]),
+                true => (&node.hi[axis], &node.lo[axis]),
+            };
+            let (o, i) = (self.origin[axis], self.inv[axis]);
+            for c in 0..WIDTH {
+                near[c] = near[c].max(corners(R::of_f32(entry[c]), o, i, R::min));
+                far[c] = far[c].min(corners(R::of_f32(exit[c]), o, i, R::max));
+            }
+        }
+        let mut hit = 0u32;
+        for c in 0..node.kids as usize {
+            if near[c] * self.less <= far[c] * self.more {
+                hit |= 1 << c;
+            }
+        }
+        (hit, near)
+    }
+}
+
+/// The least (`pick` = min) or greatest (max) of fl(fl(p − o)·i) over the corners of
+/// [o₀, o₁] × [i₀, i₁].
+#[inline(always)]
+fn corners<R: Real>(p: R, (o0, o1): (R, R), (i0, i1): (R, R), pick: fn(R, R) -> R) -> R {
+    let (a, b) = (p - o1, p - o0);
+    pick(pick(a * i0, a * i1), pick(b * i0, b * i1))
+}
+
+/// The least and greatest value of `v` over `lanes`.
+#[inline(always)]
+fn range<V: Lanes, R: Real>(v: V, lanes: V::M) -> (R, R) {
+    let values = v.array();
+    let mut bits = lanes.bits();
+    let first = R::of(values[bits.trailing_zeros() as usize]);
+    let (mut lo, mut hi) = (first, first);
+    while bits != 0 {
+        let x = R::of(values[bits.trailing_zeros() as usize]);
+        bits &= bits - 1;
+        lo = lo.min(x);
+        hi = hi.max(x);
+    }
+    (lo, hi)
+}
