@@ -85,6 +85,82 @@ pub fn frame_and_claim_files(bytes: &[u8]) {
     claim::judge_owner_line(&String::from_utf8_lossy(bytes));
 }
 
+/// Any bytes as a PLY file: a refusal, or a mesh whose arrays agree (`mesh_agrees`).
+pub fn ply_file(bytes: &[u8]) {
+    mesh_file(bytes, true)
+}
+
+/// Any bytes as an OBJ file: a refusal, or a mesh whose arrays agree (`mesh_agrees`).
+pub fn obj_file(bytes: &[u8]) {
+    mesh_file(bytes, false)
+}
+
+/// A refusal, or a mesh whose arrays agree (one normal, and texture coordinates if any, per
+/// position; every index in range; the tracer indexes them without checks), whose normals are
+/// unit length, and whose used positions are finite-or-skipped, within [−1, 1] when brought
+/// to other units. Never a panic.
+fn mesh_file(bytes: &[u8], ply: bool) {
+    {
+        let Ok(loaded) = sequence::mesh::read_bytes(bytes, ply) else {
+            return;
+        };
+        let m = &loaded.mesh;
+        let n = m.positions.len();
+        assert_eq!(m.normals.len(), n);
+        assert!(m.uvs.as_ref().is_none_or(|u| u.len() == n));
+        assert!(!m.triangles.is_empty());
+        for t in &m.triangles {
+            assert!(t.iter().all(|&i| (i as usize) < n), "{t:?} of {n}");
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            assert!(a.is_finite() && b.is_finite() && c.is_finite());
+            if loaded.exponent != 0 {
+                assert!(a.abs().max(b.abs()).max(c.abs()).max_element() < 1.0);
+            }
+        }
+        for v in &m.normals {
+            assert!((v.length() - 1.0).abs() < 1e-9, "normal {v}");
+        }
+    }
+}
+
+/// Any bytes as a PNG and an EXR texture (where the header's size is small: a large one is a
+/// question of memory, which the budget answers, not of decoding): a refusal or a pyramid down
+/// to 1×1 of finite, non-negative texels.
+pub fn texture_file(bytes: &[u8]) {
+    use image::ImageDecoder;
+    const MOST: u64 = 1 << 20;
+    let png = image::codecs::png::PngDecoder::new(std::io::Cursor::new(bytes))
+        .map(|d| d.dimensions())
+        .is_ok_and(|(w, h)| u64::from(w) * u64::from(h) <= MOST);
+    let exr = ::exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .is_ok_and(|m| {
+            m.headers
+                .iter()
+                .all(|h| (h.layer_size.width() as u64) * (h.layer_size.height() as u64) <= MOST)
+        });
+    for (is_png, small) in [(true, png), (false, exr)] {
+        if !small {
+            continue;
+        }
+        for linear in [false, true] {
+            let Ok(levels) = sequence::decode_texture(bytes, is_png, linear, "fuzz") else {
+                continue;
+            };
+            let last = levels.last().expect("a level");
+            assert_eq!((last.width, last.height), (1, 1));
+            for l in &levels {
+                assert_eq!(l.texels.len(), (l.width * l.height) as usize);
+                assert!(
+                    l.texels
+                        .iter()
+                        .flatten()
+                        .all(|v| v.is_finite() && *v >= 0.0)
+                );
+            }
+        }
+    }
+}
+
 /// An output pattern, as `--print-ffmpeg` prints it in a command: lexed back by a POSIX shell
 /// (with bash's `$'…'`, which the quoting uses for control characters), the input and output
 /// words are exactly the image2 pattern and the file name given to the command.

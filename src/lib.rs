@@ -20,6 +20,7 @@ macro_rules! eprintln {
     };
 }
 
+mod budget;
 pub mod camera;
 mod claim;
 pub mod cli;

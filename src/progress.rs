@@ -284,7 +284,8 @@ impl Progress {
             Mode::Bar(bar) => bar.finish_and_clear(),
             Mode::Lines => {}
         }
-        if self.total > 0 {
+        // A job refused before its first frame (memory, a bad output) has nothing to sum up.
+        if self.total > 0 && (self.done > 0 || interrupted || self.failed.get() > 0) {
             eprintln!(
                 "{} {} frame{} in {wall:.2} s ({rate:.2} frames/s)",
                 self.verb,

@@ -107,7 +107,7 @@ impl Aov {
     ];
 
     /// How many channels the pass writes.
-    pub fn channels(self) -> u64 {
+    pub const fn channels(self) -> u64 {
         match self {
             Aov::Id => 1,
             Aov::Motion => 2,

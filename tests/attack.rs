@@ -104,7 +104,7 @@ fn numbers_of_the_wrong_kind_are_named_as_written() {
     let cases = [
         (
             ("width: 32,", "width: 32, samples: -1,"),
-            "render.samples: must be a whole number, 0 or more, got -1",
+            "render.samples: must be 1 to 4096 samples per pixel (got -1)",
         ),
         (
             ("radius: 0.5", "radius: 0x10"),

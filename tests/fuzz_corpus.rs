@@ -100,6 +100,17 @@ fn frame_files_corpus_and_crashes() {
     assert!(grew < 200 * 1024, "peak RSS grew by {grew} kB");
 }
 
+/// The model and texture readers' targets (`ply`, `obj`, `textures`): their seeds and kept
+/// inputs, and what once hung them (a binary PLY element without properties declaring 3e18
+/// rows, each read as nothing).
+#[test]
+fn model_and_texture_corpora() {
+    replay_bytes("fuzz/corpus/ply", 4, fuzzing::ply_file);
+    replay_bytes("tests/fixtures/fuzz/ply", 1, fuzzing::ply_file);
+    replay_bytes("fuzz/corpus/obj", 5, fuzzing::obj_file);
+    replay_bytes("fuzz/corpus/textures", 8, fuzzing::texture_file);
+}
+
 /// This process's peak resident set, in kB.
 fn peak_rss_kb() -> i64 {
     // SAFETY: getrusage writes only the struct it is given.

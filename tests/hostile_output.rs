@@ -499,7 +499,9 @@ fn a_job_that_cannot_fit_in_memory_is_refused_before_it_starts() {
                 4
             ),
             Some(1) => assert!(
-                said.contains("not enough memory: one frame needs about 0.08 GB"),
+                said.contains("not enough memory: one frame needs about 8")
+                    && said.contains(" MB (rendered, then encoded)")
+                    && !said.contains("0.00"),
                 "{mb} MB: {said}"
             ),
             code => panic!("{mb} MB: exit {code:?}: {said}"),
@@ -557,4 +559,273 @@ fn a_claim_with_no_owner_line_is_shown_as_owner_unknown() {
     child.wait().unwrap();
     let line = waiting.expect("the run waits on the claim");
     assert!(line.contains("(owner unknown, heartbeat "), "{line}");
+}
+
+/// `--alpha --depth --aov normal,albedo,id,motion,position` writes 17 EXR channels, which the
+/// frame check refused (more than 16): every run and every resume rendered every frame again
+/// and `status` called them corrupt, so a farm looped for ever. Every channel set rayreel
+/// writes is now its own: the second run renders nothing and `status` exits 0.
+#[test]
+fn frames_with_every_channel_are_up_to_date_on_the_next_run() {
+    let tmp = scratch("exr-every-channel");
+    std::fs::write(tmp.join("seq.yaml"), sequence(24, 16, &orbit(24, 1.0))).unwrap();
+    let args = [
+        "seq.yaml",
+        "--alpha",
+        "--depth",
+        "--aov",
+        "normal,albedo,id,motion,position",
+        "--frames",
+        "0-1",
+        "-o",
+        "f_####.exr",
+    ];
+    let first = run_in(&tmp, &[&["render"], &args[..]].concat());
+    assert!(first.status.success(), "{}", stderr(&first));
+    let again = run_in(&tmp, &[&["render"], &args[..]].concat());
+    let said = stderr(&again);
+    assert!(again.status.success(), "{said}");
+    assert!(
+        said.contains("2 frames: 2 up to date → rendering 0"),
+        "{said}"
+    );
+    let status = run_in(&tmp, &[&["status"], &args[..]].concat());
+    assert_eq!(status.status.code(), Some(0), "{}", stderr(&status));
+}
+
+/// A directory `bin/` holding an `ffmpeg` that reads the stream, writes `bytes` where the
+/// video should go, prints `said` on stderr and exits 0: ffmpeg 5.1 on a full disk prints
+/// "Error writing trailer … No space left on device" and exits 0.
+fn lying_ffmpeg(dir: &Path, said: &str, bytes: &[u8]) -> String {
+    use std::os::unix::fs::PermissionsExt;
+    let bin = dir.join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    std::fs::write(dir.join("written"), bytes).unwrap();
+    let script = format!(
+        "#!/bin/sh\nfor last; do :; done\ncat > /dev/null\ncp \"{}\" \"$last\"\nprintf '%s\\n' \"{said}\" >&2\nexit 0\n",
+        dir.join("written").display()
+    );
+    let ffmpeg = bin.join("ffmpeg");
+    std::fs::write(&ffmpeg, script).unwrap();
+    std::fs::set_permissions(&ffmpeg, std::fs::Permissions::from_mode(0o755)).unwrap();
+    format!(
+        "{}:{}",
+        bin.display(),
+        std::env::var("PATH").unwrap_or_default()
+    )
+}
+
+/// An MP4 cut where ffmpeg 5.1 leaves it when its trailer cannot be written: the file type
+/// box and the frames' box, but no index (`moov`).
+fn mp4_without_index() -> Vec<u8> {
+    let mut b = Vec::new();
+    b.extend(16u32.to_be_bytes());
+    b.extend(b"ftypisom\0\0\x02\0");
+    b.extend(24u32.to_be_bytes());
+    b.extend(b"mdat");
+    b.extend([0u8; 16]);
+    b
+}
+
+/// ffmpeg exiting 0 is not enough: a video whose encoder reported an error, or whose
+/// container is not whole, is not renamed into place, and the run exits 1 saying why; nothing
+/// is left under any name.
+#[test]
+fn a_video_ffmpeg_could_not_finish_is_never_published() {
+    let tmp = scratch("video-lying-ffmpeg");
+    std::fs::write(tmp.join("seq.yaml"), small()).unwrap();
+    let cases = [
+        (
+            "[mp4 @ 0x5581] Error writing trailer of out.mp4: No space left on device",
+            mp4_without_index(),
+            "ffmpeg exited 0 but reported an error; ffmpeg said: [mp4 @ 0x5581] Error writing trailer",
+        ),
+        (
+            "",
+            mp4_without_index(),
+            "ffmpeg exited 0 but the file it wrote is not whole: no `moov` box",
+        ),
+    ];
+    for (said, bytes, want) in cases {
+        let path = lying_ffmpeg(&tmp, said, &bytes);
+        let out = bin()
+            .args(["render", "seq.yaml", "-q", "--video", "v/out.mp4"])
+            .current_dir(&tmp)
+            .env("PATH", &path)
+            .output()
+            .unwrap();
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert!(
+            err.contains("v/out.mp4: ") && err.contains(want),
+            "wanted `{want}` in {err}"
+        );
+        assert!(err.contains("nothing was written there"), "{err}");
+        let left: Vec<String> = files(&tmp.join("v"));
+        assert!(left.is_empty(), "{left:?}");
+    }
+}
+
+/// The real ffmpeg writing into a small tmpfs (root only): whatever the size, a run either
+/// publishes a video ffprobe reads with every frame, or exits 1 and publishes nothing. Before,
+/// sizes that let ffmpeg write the frames but not its trailer gave exit 0 and an unplayable
+/// file.
+#[test]
+fn a_full_disk_never_leaves_a_broken_video_under_its_name() {
+    if !(have_tool("ffmpeg") && have_tool("ffprobe")) {
+        return;
+    }
+    let tmp = scratch("video-full-disk");
+    // 24 frames at 320×180 make about 28 kB of H.264: disks of 4 to 24 kB fill before the
+    // trailer (ffmpeg 5.1 then exits 0), larger ones take it all.
+    std::fs::write(tmp.join("seq.yaml"), sequence(320, 180, &orbit(24, 1.0))).unwrap();
+    let disk = tmp.join("disk");
+    std::fs::create_dir_all(&disk).unwrap();
+    let (mut published, mut refused) = (0, 0);
+    for kb in (4..=36).step_by(8) {
+        let mounted = std::process::Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={kb}k"), "tmpfs"])
+            .arg(&disk)
+            .status()
+            .is_ok_and(|s| s.success());
+        if !mounted {
+            assert!(
+                std::env::var("RAYREEL_REQUIRE_TOOLS").as_deref() != Ok("1"),
+                "mounting a tmpfs failed (this test needs root)"
+            );
+            eprintln!("SKIPPED: cannot mount a tmpfs (not root?)");
+            return;
+        }
+        let out = run_in(
+            &tmp,
+            &["render", "seq.yaml", "-q", "--video", "disk/out.mp4"],
+        );
+        let video = disk.join("out.mp4");
+        match out.status.code() {
+            Some(0) => {
+                let probe = std::process::Command::new("ffprobe")
+                    .args(["-v", "error", "-count_packets", "-select_streams", "v:0"])
+                    .args(["-show_entries", "stream=nb_read_packets", "-of", "csv=p=0"])
+                    .arg(&video)
+                    .output()
+                    .unwrap();
+                let count = String::from_utf8_lossy(&probe.stdout).trim().to_string();
+                assert!(
+                    probe.status.success() && probe.stderr.is_empty() && count == "24",
+                    "{kb} kB: published, but ffprobe says {count:?} {}",
+                    String::from_utf8_lossy(&probe.stderr)
+                );
+                published += 1;
+            }
+            Some(1) => {
+                assert!(!video.exists(), "{kb} kB: exit 1 with a video in place");
+                refused += 1;
+            }
+            code => panic!("{kb} kB: exit {code:?}: {}", stderr(&out)),
+        }
+        assert!(
+            files(&disk).iter().all(|f| f == "out.mp4"),
+            "{kb} kB: {:?}",
+            files(&disk)
+        );
+        let _ = std::process::Command::new("umount").arg(&disk).status();
+    }
+    assert!(
+        published > 0 && refused > 0,
+        "{published} published, {refused} refused"
+    );
+}
+
+/// `check` printed a line per area light note and per placement (1,000 area lights: 1,009
+/// lines, one of 4,044 characters; 10,000 placements: 10,010 lines). Lists are now cut to
+/// their first few and counted, samples grouped, and `--full` lists everything.
+#[test]
+fn check_stays_on_one_screen_for_any_scene() {
+    let tmp = scratch("check-screen");
+    std::fs::write(tmp.join("t.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let mut yaml = String::from("render: { width: 32, height: 24, samples: 1 }\nobjects:\n");
+    for i in 0..10_000 {
+        yaml += &format!(
+            "  - mesh: {{ file: t.obj, translate: [{}, 0, -5], material: {{ diffuse: [0.5, 0.5, 0.5] }} }}\n",
+            i as f64 * 0.01
+        );
+    }
+    yaml += "lights:\n";
+    for i in 0..1000 {
+        yaml += &format!(
+            "  - sphere: {{ center: [{i}, 5, 0], radius: 0.5, samples: {}, diffuse: [0.001, 0.001, 0.001], specular: [0, 0, 0] }}\n",
+            [8, 16, 32][i % 3]
+        );
+    }
+    yaml += "camera: { position: [0, 0, 5], look_at: [0, 0, 0] }\n";
+    std::fs::write(tmp.join("seq.yaml"), yaml).unwrap();
+    let out = run_in(&tmp, &["check", "seq.yaml"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout.clone()).unwrap();
+    let lines = text.lines().count() + stderr(&out).lines().count();
+    let longest = text.lines().map(|l| l.chars().count()).max().unwrap();
+    assert!(
+        lines <= 24 && longest <= 240,
+        "{lines} lines, longest {longest}:\n{text}"
+    );
+    assert!(
+        text.contains(
+            "lights:     1000 (1000 sphere (334 with 8, 333 with 16 and 333 with 32 samples))"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("note: lights[0, 3, 6, 9 and 330 others] (sphere): 8 samples"),
+        "{text}"
+    );
+    assert!(
+        text.contains(
+            "… and 9997 more placements of this file (`rayreel check --full` lists them)"
+        ),
+        "{text}"
+    );
+    let full = run_in(&tmp, &["check", "seq.yaml", "--full"]);
+    let text = String::from_utf8(full.stdout).unwrap();
+    assert!(text.contains("objects[9999]: phong shading") && text.lines().count() > 10_000);
+}
+
+/// `camera --format chan` gave a pan of −180 for a camera looking straight up, where the docs
+/// say 0 with the roll taking the rest, and an orbit's pan jumped from 180 to −172.5 between
+/// frames, so importers that interpolate spun the long way. Pans and rolls now continue from
+/// the line before.
+#[test]
+fn chan_pans_are_zero_straight_up_and_never_jump() {
+    let tmp = scratch("chan-unwrap");
+    let still = sequence(
+        32,
+        24,
+        "camera: { position: [0, -5, 0], look_at: [0, 0, 0], up: [0, 0, -1] }\n",
+    );
+    std::fs::write(tmp.join("up.yaml"), still).unwrap();
+    std::fs::write(tmp.join("orbit.yaml"), sequence(32, 24, &orbit(24, 2.0))).unwrap();
+    let columns = |file: &str| -> Vec<Vec<f64>> {
+        let out = run_in(&tmp, &["camera", file, "--format", "chan"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        String::from_utf8(out.stdout)
+            .unwrap()
+            .lines()
+            .map(|l| l.split(' ').map(|v| v.parse().unwrap()).collect())
+            .collect()
+    };
+    let up = columns("up.yaml");
+    assert!(
+        (up[0][4] - 90.0).abs() < 1e-9 && up[0][5] == 0.0,
+        "{:?}",
+        up[0]
+    );
+    let orbit = columns("orbit.yaml");
+    assert_eq!(orbit.len(), 48);
+    for pair in orbit.windows(2) {
+        let (a, b) = (&pair[0], &pair[1]);
+        assert!(
+            (b[5] - a[5]).abs() < 180.0 && (b[6] - a[6]).abs() < 180.0,
+            "{a:?} → {b:?}"
+        );
+    }
+    assert!(orbit[47][5].abs() > 300.0, "{:?}", orbit[47]);
 }

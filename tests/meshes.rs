@@ -303,7 +303,7 @@ fn bad_meshes_are_refused_with_file_line_and_field() {
         ),
         (
             "short.obj",
-            "short.obj: line 3: a face needs at least 3 vertices",
+            "short.obj: line 3: the file has no faces of 3 or more corners (1 with fewer)",
         ),
         (
             "word.obj",

@@ -67,6 +67,10 @@ pub enum Command {
 pub struct CheckArgs {
     /// The sequence file (YAML; `-` reads standard input).
     pub(crate) file: PathBuf,
+    /// List every mesh file, placement, texture, area light note and warning, where the
+    /// summary shows the first few of each and counts the rest.
+    #[arg(long)]
+    pub(crate) full: bool,
     /// A model library: a folder where mesh and image files the sequence names are also
     /// looked for, after the sequence file's folder (repeatable; RAYREEL_ASSETS adds more,
     /// separated by `:`).

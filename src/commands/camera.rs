@@ -4,7 +4,7 @@
 //! renders that frame exactly. `chan` is Nuke's channel file (`chan`, below).
 
 use super::{Error, print_warnings};
-use crate::camera::{Camera, Pose};
+use crate::camera::Camera;
 use crate::cli::{CameraArgs, CameraFormat};
 use crate::sequence::{self, Sequence};
 use glam::DVec3;
@@ -23,7 +23,12 @@ pub(crate) fn camera(args: CameraArgs) -> Result<(), Error> {
         None => crate::frameset::FrameSet::range(first, last, 1),
     };
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
-    let mut lines = frames.iter().map(|n| line(&seq, n, args.format));
+    // chan's angles continue from the line before (see `unwrap`).
+    let mut before = None;
+    let mut lines = frames.iter().map(|n| match args.format {
+        CameraFormat::Chan => chan_line(&seq, n, &mut before),
+        format => line(&seq, n, format),
+    });
     let header = (args.format == CameraFormat::Csv).then(|| CSV_HEADER.to_string());
     let written = header
         .into_iter()
@@ -56,7 +61,7 @@ fn line(seq: &Sequence, n: u64, format: CameraFormat) -> String {
                 pose.fov
             )
         }
-        CameraFormat::Chan => chan(n, &pose, seq.settings.width, seq.settings.height),
+        CameraFormat::Chan => chan_line(seq, n, &mut None),
         CameraFormat::Json => {
             let v = |v: DVec3| format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z);
             format!(
@@ -76,12 +81,16 @@ fn line(seq: &Sequence, n: u64, format: CameraFormat) -> String {
 /// pan about y), of the camera frame whose columns are right, up and −forward (Nuke's camera,
 /// like rayreel's, is y up and looks down −z); vfov is the vertical field of view in degrees
 /// for the file's render size. A pose whose camera cannot be built (never rendered) prints
-/// zero rotations.
-fn chan(n: u64, pose: &Pose, width: u32, height: u32) -> String {
-    let [rx, ry, rz] = match Camera::new(pose) {
-        Ok(c) => zxy_degrees(c.forward, c.up),
+/// zero rotations. Pan and roll continue from `before`, the line printed before (`unwrap`),
+/// which this line's angles then replace.
+fn chan_line(seq: &Sequence, n: u64, before: &mut Option<[f64; 3]>) -> String {
+    let (pose, _) = seq.timeline.view_at(seq.timeline.time_of(n));
+    let [rx, ry, rz] = match Camera::new(&pose) {
+        Ok(c) => unwrap(zxy_degrees(c.forward, c.up), *before),
         Err(_) => [0.0; 3],
     };
+    *before = Some([rx, ry, rz]);
+    let (width, height) = (seq.settings.width, seq.settings.height);
     let s = libm::tan(pose.fov.to_radians() * 0.5) * f64::from(height) / f64::from(width);
     let vfov = (2.0 * libm::atan(s)).to_degrees();
     // `+ 0.0` turns −0 into 0: a channel file has no use for the sign of zero.
@@ -97,13 +106,29 @@ fn chan(n: u64, pose: &Pose, width: u32, height: u32) -> String {
     format!("{n} {x:?} {y:?} {z:?} {rx:?} {ry:?} {rz:?} {vfov:?}")
 }
 
+/// Pan and roll each moved by the whole turns that bring them nearest the line before's, as
+/// Nuke's and Blender's exporters do, so that importers interpolating between frames turn the
+/// short way (an orbit's pan goes 172.5, 180, 187.5, not 172.5, 180, −172.5). The tilt, in
+/// [−90, 90], never wraps. The first line's angles are as `zxy_degrees` gives them.
+fn unwrap([rx, ry, rz]: [f64; 3], before: Option<[f64; 3]>) -> [f64; 3] {
+    let Some([_, py, pz]) = before else {
+        return [rx, ry, rz];
+    };
+    let near = |v: f64, p: f64| v + 360.0 * ((p - v) / 360.0).round();
+    [rx, near(ry, py), near(rz, pz)]
+}
+
 /// Euler angles (rx, ry, rz) in degrees with Ry(ry)·Rx(rx)·Rz(rz) = [right, up, −forward]:
 /// rx = asin(forward.y) (tilt), ry = atan2(−forward.x, −forward.z) (pan), and rz (roll) from
-/// where `up` lies in the plane the pan and tilt leave it. Looking straight up or down, the
-/// pan is 0 and the roll takes the rest.
+/// where `up` lies in the plane the pan and tilt leave it. Looking straight up or down
+/// (forward.x and forward.z both zero), the pan is 0 and the roll takes the rest.
 pub(crate) fn zxy_degrees(forward: DVec3, up: DVec3) -> [f64; 3] {
     let rx = libm::asin(forward.y.clamp(-1.0, 1.0));
-    let ry = libm::atan2(-forward.x, -forward.z);
+    // atan2(±0, ±0) is 0 or ±π by the zeros' signs: straight up or down, the pan is 0.
+    let ry = match forward.x == 0.0 && forward.z == 0.0 {
+        true => 0.0,
+        false => libm::atan2(-forward.x, -forward.z),
+    };
     let (sx, cx, sy, cy) = (libm::sin(rx), libm::cos(rx), libm::sin(ry), libm::cos(ry));
     // Rz·ŷ = (−sin rz, cos rz, 0) in the frame Ry·Rx leaves: its x and y axes in world space.
     let x_axis = DVec3::new(cy, 0.0, -sy);
@@ -115,6 +140,7 @@ pub(crate) fn zxy_degrees(forward: DVec3, up: DVec3) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::Pose;
     use glam::DMat3;
 
     #[test]
@@ -132,6 +158,8 @@ mod tests {
                 DVec3::new(0.3, 1.0, -0.2),
             ),
             (DVec3::new(0.0, 4.0, 0.0), DVec3::ZERO, DVec3::Z),
+            (DVec3::ZERO, DVec3::new(0.0, 4.0, 0.0), DVec3::Z),
+            (DVec3::ZERO, DVec3::new(-0.0, -4.0, -0.0), DVec3::NEG_X),
         ];
         for (position, look_at, up) in cases {
             let pose = Pose {
@@ -154,5 +182,25 @@ mod tests {
                 assert!((a - b).length() < 1e-12, "{position}: {a} vs {b}");
             }
         }
+    }
+
+    #[test]
+    fn straight_up_or_down_the_pan_is_zero_and_angles_unwrap() {
+        for (look, up) in [
+            (DVec3::Y, DVec3::Z),
+            (DVec3::new(-0.0, -1.0, -0.0), DVec3::NEG_Z),
+        ] {
+            let [_, ry, _] = zxy_degrees(look, up);
+            assert_eq!(ry, 0.0);
+        }
+        assert_eq!(
+            unwrap([1.0, -172.5, 10.0], Some([0.0, 180.0, 0.0])),
+            [1.0, 187.5, 10.0]
+        );
+        assert_eq!(unwrap([1.0, 170.0, -350.0], None), [1.0, 170.0, -350.0]);
+        assert_eq!(
+            unwrap([0.0, 5.0, 0.0], Some([0.0, 725.0, -3.0])),
+            [0.0, 725.0, 0.0]
+        );
     }
 }

@@ -1,6 +1,7 @@
 //! `rayreel check`: a sequence's one-screen summary and what a job of it may cost.
 
-use super::{Error, estimate, out, print_warnings, shown};
+use super::screen::{Screen, grouped, runs};
+use super::{Error, estimate, out, shown};
 use crate::cli::CheckArgs;
 use crate::console::printable;
 use crate::frameset::FrameSet;
@@ -12,7 +13,18 @@ use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
 
 pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
     let seq = sequence::load_with(&args.file, &super::assets(&args.assets)?)?;
-    print_warnings(&seq);
+    let screen = Screen { full: args.full };
+    let warnings: Vec<String> = crate::warnings::for_sequence(&seq)
+        .into_iter()
+        .map(|w| format!("warning: {w}"))
+        .collect();
+    // Line by line through the crate's `eprintln!`, which survives a failing stderr.
+    for line in screen
+        .lines(&warnings, warnings.len(), "", "warnings")
+        .lines()
+    {
+        eprintln!("{line}");
+    }
     let t = &seq.timeline;
     let frames = crate::frameset::FrameSet::range(t.first_frame(), t.last_frame(), 1);
     let format = crate::sequence::output_pattern(&seq.output, t.last_frame())
@@ -22,15 +34,22 @@ pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
                 .ok()
         });
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let (cost, warning) = cost(&seq, &frames, cores, format.as_ref());
+    let (cost, warning) = cost(
+        &seq,
+        &frames,
+        cores,
+        format.as_ref(),
+        &format!("\n{INDENT}"),
+    );
     for w in warning.into_iter().chain(super::grain::warning(&seq)) {
         eprintln!("{w}");
     }
-    out(&format!(
-        "{}  cost:       {cost}\n",
-        summary(&shown(&args.file), &seq)
-    ))
+    let summary = summary(&shown(&args.file), &seq, screen).map_err(Error::Failed)?;
+    out(&format!("{summary}  cost:       {cost}\n"))
 }
+
+/// Where a summary's continuation lines start (under the values after `  objects:    `).
+const INDENT: &str = "              ";
 
 /// Jobs measured to take longer than this are worth a warning before they start.
 const LONG_JOB_SECONDS: f64 = 24.0 * 3600.0;
@@ -74,12 +93,13 @@ fn surfaces_per_sample(seq: &Sequence) -> f64 {
 /// `about 9.2 min for 240 frames (measured: …); at most 3.98e11 rays (…)`, or `nothing to
 /// render`, and a warning for a job of more than a day: what `frames` of `seq` take on
 /// `threads` threads written as `format`, from a short probe (`estimate`), beside the ray
-/// count's upper bound.
+/// count's upper bound, after `join` (`check` starts it on a line of its own).
 pub(crate) fn cost(
     seq: &Sequence,
     frames: &FrameSet,
     threads: usize,
     format: Option<&FileFormat>,
+    join: &str,
 ) -> (String, Option<String>) {
     let n = frames.len();
     if n == 0 {
@@ -105,7 +125,7 @@ pub(crate) fn cost(
         true => format!("at least {}", estimate::duration(e.seconds)),
         false => format!("about {}", estimate::duration(e.seconds)),
     };
-    let line = format!("{about} for {frames_text} ({}); {bound}", e.basis);
+    let line = format!("{about} for {frames_text} ({});{join}{bound}", e.basis);
     let warning = (e.seconds > LONG_JOB_SECONDS).then(|| {
         format!(
             "warning: this job may take {about} on this machine ({}); check the size, render.samples and render.max_depth (Ctrl-C or SIGTERM stops a render within about a second)",
@@ -115,18 +135,19 @@ pub(crate) fn cost(
     (line, warning)
 }
 
-/// The one-screen description `rayreel check` prints.
-pub(crate) fn summary(file: &str, seq: &Sequence) -> String {
+/// The one-screen description `rayreel check` prints (everything with `--full`); an error
+/// when a mesh's hierarchy, built to be measured, does not fit in memory.
+pub(crate) fn summary(file: &str, seq: &Sequence, screen: Screen) -> Result<String, String> {
     let (scene, s) = (&seq.scene, &seq.settings);
-    format!(
+    Ok(format!(
         "{file}: ok\n  objects:    {}\n{}  materials:  {}\n{}{}  lights:     {}\n{}  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}  output:     {}\n",
         objects(scene),
-        super::meshes::summary(scene),
+        super::meshes::summary(scene, screen)?,
         scene.materials.len(),
-        textures(scene),
+        textures(scene, screen),
         sky(scene),
         lights(scene),
-        penumbra_notes(scene, s),
+        penumbra_notes(scene, s, screen),
         s.width,
         s.height,
         s.max_depth,
@@ -135,7 +156,7 @@ pub(crate) fn summary(file: &str, seq: &Sequence) -> String {
         timing(&seq.timeline),
         film(seq),
         printable(&seq.output)
-    )
+    ))
 }
 
 /// The `objects:` line: `4 (3 spheres, 1 plane)`, with `, 2 meshes` when there are any.
@@ -165,8 +186,8 @@ fn objects(scene: &Scene) -> String {
 }
 
 /// The `textures:` lines, nothing without textures: each image once (its size, levels,
-/// memory and load time), and the number of checker maps.
-fn textures(scene: &Scene) -> String {
+/// memory and load time; the first few), and the number of checker maps.
+fn textures(scene: &Scene, screen: Screen) -> String {
     let maps = scene
         .materials
         .iter()
@@ -186,10 +207,12 @@ fn textures(scene: &Scene) -> String {
             }
         }
     }
-    let mut out = String::new();
-    for i in images {
-        out += &format!("  texture:    {}\n", image_line(i, ""));
-    }
+    let lines: Vec<String> = images
+        .iter()
+        .take(screen.keep(images.len()))
+        .map(|i| format!("  texture:    {}", image_line(i, "")))
+        .collect();
+    let mut out = screen.lines(&lines, images.len(), "              ", "texture images");
     if checkers > 0 {
         out += &format!(
             "  texture:    {} (box-filtered over each ray's footprint)\n",
@@ -254,22 +277,16 @@ fn colour(v: glam::DVec3) -> String {
 }
 
 /// The `lights:` line: `2 (1 point, 1 ambient)`, or `0 (none)`; area lights with their
-/// points per eye sample: `1 sphere (16 samples)`, `2 rect (16 and 64 samples)`.
+/// points per eye sample, grouped: `1 sphere (16 samples)`, `1000 rect (16 samples)`,
+/// `3 rect (2 with 16, 1 with 64 samples)`.
 fn lights(scene: &Scene) -> String {
     let mut kinds = [0usize; 6];
-    let mut samples: [Vec<String>; 6] = Default::default();
+    let mut samples: [Vec<u32>; 6] = Default::default();
     for l in &scene.lights {
-        let kind = match l {
-            Light::Point { .. } => 0,
-            Light::Directional { .. } => 1,
-            Light::Spot { .. } => 2,
-            Light::Ambient { .. } => 3,
-            Light::Sphere { .. } => 4,
-            Light::Rect { .. } => 5,
-        };
+        let kind = kind_index(l);
         kinds[kind] += 1;
         if let Some(n) = l.area_samples() {
-            samples[kind].push(n.to_string());
+            samples[kind].push(n);
         }
     }
     let light_list: Vec<String> = ["point", "directional", "spot", "ambient", "sphere", "rect"]
@@ -277,9 +294,24 @@ fn lights(scene: &Scene) -> String {
         .zip(kinds)
         .zip(samples)
         .filter(|((_, n), _)| *n > 0)
-        .map(|((k, n), s)| match s.is_empty() {
-            true => format!("{n} {k}"),
-            false => format!("{n} {k} ({} samples)", list(&s)),
+        .map(|((k, n), s)| match grouped(s).as_slice() {
+            [] => format!("{n} {k}"),
+            [(m, _)] => format!("{n} {k} ({m} samples)"),
+            groups => {
+                let each: Vec<String> = groups
+                    .iter()
+                    .take(super::screen::SHOWN)
+                    .map(|(m, c)| format!("{c} with {m}"))
+                    .collect();
+                let more = match groups.len() > super::screen::SHOWN {
+                    true => format!(
+                        " and {} other counts of",
+                        groups.len() - super::screen::SHOWN
+                    ),
+                    false => String::new(),
+                };
+                format!("{n} {k} ({}{more} samples)", list(&each))
+            }
         })
         .collect();
     let list = match light_list.is_empty() {
@@ -287,6 +319,18 @@ fn lights(scene: &Scene) -> String {
         false => light_list.join(", "),
     };
     format!("{} ({list})", scene.lights.len())
+}
+
+/// The place of a light's kind in the `lights:` line.
+fn kind_index(l: &Light) -> usize {
+    match l {
+        Light::Point { .. } => 0,
+        Light::Directional { .. } => 1,
+        Light::Spot { .. } => 2,
+        Light::Ambient { .. } => 3,
+        Light::Sphere { .. } => 4,
+        Light::Rect { .. } => 5,
+    }
 }
 
 /// `16`, `16 and 64`, `4, 16 and 64`.
@@ -302,26 +346,45 @@ fn list(items: &[String]) -> String {
 /// a visible fraction to about 1/64 in the worst case, a couple of 8-bit levels in sRGB.
 pub(crate) const QUIET_PENUMBRA: u64 = 64;
 
-/// A note under `lights:` for each area light whose points per pixel, `samples` × the pixel
-/// samples every pixel gets (`render.samples`; adaptive passes add more only where they
-/// see noise), are below `QUIET_PENUMBRA`.
-fn penumbra_notes(scene: &Scene, s: &Settings) -> String {
-    let mut out = String::new();
+/// A note under `lights:` for each kind and count of area lights whose points per pixel,
+/// `samples` × the pixel samples every pixel gets (`render.samples`; adaptive passes add more
+/// only where they see noise), are below `QUIET_PENUMBRA`: one note for all the lights that
+/// share them (`lights[0-999] (sphere)`).
+fn penumbra_notes(scene: &Scene, s: &Settings, screen: Screen) -> String {
+    let mut groups: Vec<((usize, u32), Vec<usize>)> = Vec::new();
     for (i, l) in scene.lights.iter().enumerate() {
         let Some(m) = l.area_samples() else { continue };
-        let points = u64::from(m) * u64::from(s.samples);
-        if points < QUIET_PENUMBRA {
-            let kind = match l {
-                Light::Sphere { .. } => "sphere",
-                _ => "rect",
-            };
-            out.push_str(&format!(
-                "              note: lights[{i}] ({kind}): {m} samples × {} = {points} points on the light per pixel, under {QUIET_PENUMBRA}: its soft shadows will be noisy; raise its samples or render.samples\n",
-                noun(f64::from(s.samples), "pixel sample"),
-            ));
+        if u64::from(m) * u64::from(s.samples) >= QUIET_PENUMBRA {
+            continue;
+        }
+        let key = (kind_index(l), m);
+        match groups.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, lights)) => lights.push(i),
+            None => groups.push((key, vec![i])),
         }
     }
-    out
+    let notes: Vec<String> = groups
+        .iter()
+        .map(|((kind, m), lights)| {
+            let points = u64::from(*m) * u64::from(s.samples);
+            let kind = if *kind == 4 { "sphere" } else { "rect" };
+            let (its, raise) = match lights.len() {
+                1 => ("its", "its samples"),
+                _ => ("their", "their samples"),
+            };
+            format!(
+                "              note: lights[{}] ({kind}): {m} samples × {} = {points} points on the light per pixel, under {QUIET_PENUMBRA}: {its} soft shadows will be noisy; raise {raise} or render.samples",
+                runs(lights),
+                noun(f64::from(s.samples), "pixel sample"),
+            )
+        })
+        .collect();
+    screen.lines(
+        &notes,
+        notes.len(),
+        "              ",
+        "notes on area lights",
+    )
 }
 
 /// The `frames:` line: `144 at 24 fps (6 s), orbit of radius 3 (1 turn)`.
@@ -415,7 +478,12 @@ fn timing(t: &Timeline) -> String {
         Speed::Constant => {
             let passed: Vec<String> = inner
                 .clone()
+                .take(super::screen::SHOWN)
                 .map(|i| format!("{i} at {:.3} s", k.passes[i]))
+                .chain(
+                    (inner.len() > super::screen::SHOWN)
+                        .then(|| format!("and {} more", inner.len() - super::screen::SHOWN)),
+                )
                 .collect();
             let rate = t.speed_at(k.passes[0]);
             let ignored = match passed.is_empty() {
@@ -429,16 +497,15 @@ fn timing(t: &Timeline) -> String {
         }
         Speed::Keys if k.keys.len() < 2 => return String::new(),
         Speed::Keys => {
-            let stops: Vec<String> = (0..k.keys.len())
+            let stops: Vec<usize> = (0..k.keys.len())
                 .filter(|&i| k.keys[i].ease == Ease::Stop)
-                .map(|i| i.to_string())
                 .collect();
             match stops.is_empty() {
                 true => "each keyframe at its time".to_string(),
                 false => format!(
                     "each keyframe at its time, stopping at keyframe{} {}",
                     if stops.len() == 1 { "" } else { "s" },
-                    stops.join(", ")
+                    runs(&stops)
                 ),
             }
         }

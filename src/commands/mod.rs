@@ -6,6 +6,7 @@ mod estimate;
 mod grain;
 mod meshes;
 mod render;
+mod screen;
 mod tools;
 mod video;
 
@@ -60,6 +61,7 @@ pub enum Error {
 impl Error {
     pub fn exit_code(&self) -> u8 {
         match self {
+            Error::Load(LoadError::Memory { .. }) => 1,
             Error::Load(_) | Error::Usage(_) => 2,
             Error::Failed(_) | Error::Run(_) | Error::Incomplete(_) => 1,
             Error::Interrupted(_, code) => *code,

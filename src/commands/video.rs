@@ -65,7 +65,8 @@ pub(super) fn end_video(
 ) -> Result<Result<Outcome, RunError>, Error> {
     match outcome {
         Ok(Outcome::Complete { .. } | Outcome::ReaderClosed { .. }) => {
-            encoder.finish().map_err(Error::Failed)?;
+            let whole_stream = matches!(outcome, Ok(Outcome::Complete { .. }));
+            encoder.finish(whole_stream).map_err(Error::Failed)?;
             Ok(outcome)
         }
         Ok(Outcome::Interrupted { written, .. }) => {
@@ -200,16 +201,16 @@ pub(super) fn encode_files(video: &VideoJob, job: &FromFiles) -> Result<(), Erro
     let mut encoder = video.start().map_err(Error::Failed)?;
     let fed = feed(&mut encoder, job, &mut progress);
     progress.finish(matches!(fed, Err(Error::Interrupted(..))));
-    fed?;
-    encoder.finish().map_err(Error::Failed)
+    let whole_stream = fed?;
+    encoder.finish(whole_stream).map_err(Error::Failed)
 }
 
-/// Writes every frame file's stream bytes into ffmpeg, in frame order. A closed pipe means
-/// ffmpeg stopped: `finish` then reports what it said.
-fn feed(encoder: &mut Encoder, job: &FromFiles, progress: &mut Progress) -> Result<(), Error> {
+/// Writes every frame file's stream bytes into ffmpeg, in frame order; whether ffmpeg took
+/// them all. A closed pipe means ffmpeg stopped: `finish` then reports what it said.
+fn feed(encoder: &mut Encoder, job: &FromFiles, progress: &mut Progress) -> Result<bool, Error> {
     use std::io::Write;
     let Some(mut input) = encoder.take_input() else {
-        return Ok(());
+        return Ok(false);
     };
     let s = &job.seq.settings;
     let expected = Expected {
@@ -230,11 +231,11 @@ fn feed(encoder: &mut Encoder, job: &FromFiles, progress: &mut Progress) -> Resu
         let bytes = reread::raw_frame(&path, &expected, s.encoding)
             .map_err(|e| Error::Failed(format!("{}: {e}; no video was made", shown(&path))))?;
         if input.write_all(&bytes).is_err() {
-            return Ok(());
+            return Ok(false);
         }
         progress.frame_done(n, "to ffmpeg", start.elapsed().as_secs_f64());
     }
-    Ok(())
+    Ok(true)
 }
 
 /// For `--video` without `-o`: a note when frames of the job are already finished at the

@@ -329,9 +329,9 @@ fn nearer(p: u128, q: u128, x: (u128, u128), y: (u128, u128)) -> (u128, u128) {
     if y_nearer { y } else { x }
 }
 
-/// The most channels a file is decoded with: rayreel writes at most R, G, B, A and Z, and
-/// every channel costs a plane of the job's size to decode.
-const MAX_CHANNELS: usize = 16;
+/// The most channels a file is decoded with: every channel rayreel writes (R, G, B, A, Z and
+/// every compositing pass), since every channel costs a plane of the job's size to decode.
+const MAX_CHANNELS: usize = crate::output::format::MOST_EXR_CHANNELS as usize;
 
 /// The verdict on a file from its header alone, when the header already decides it: decoding
 /// allocates what the header claims (a 920-byte file claiming 262144×3 pixels in 4 channels

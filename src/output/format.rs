@@ -91,20 +91,35 @@ pub struct Expected {
     pub alpha: bool,
 }
 
+/// The compositing passes' channels, all of them: 32-bit floats.
+const PASS_CHANNELS: u64 = {
+    let mut n = 0;
+    let mut i = 0;
+    while i < crate::settings::Aov::ALL.len() {
+        n += crate::settings::Aov::ALL[i].channels();
+        i += 1;
+    }
+    n
+};
+
+/// The most channels an EXR frame of rayreel's has: R, G, B, A, Z and every pass.
+pub(crate) const MOST_EXR_CHANNELS: u64 = 5 + PASS_CHANNELS;
+
 impl Expected {
     /// The most bytes a frame file of this job can take: twice its samples uncompressed (a
-    /// frame's channels at most, with a filter byte per PNG row; no encoder doubles its
-    /// input) and 1 MiB for signatures, headers, chunk and block framing and metadata.
+    /// frame's channels at most — in EXR every channel rayreel may write, passes included —
+    /// with a filter byte per PNG row; no encoder doubles its input) and 1 MiB for
+    /// signatures, headers, chunk and block framing and metadata.
     pub fn max_file_bytes(&self) -> u64 {
         let per_pixel = match self.format {
             FileFormat::Png { .. } => {
                 let (depth, _, channels) = self.format.png_layout(self.alpha);
                 channels * u64::from(depth / 8)
             }
-            // R, G, B and A in the colour precision, and a 32-bit Z.
+            // R, G, B and A in the colour precision, a 32-bit Z and 32-bit passes.
             FileFormat::Exr { precision } => match precision {
-                ExrPrecision::Half => 4 * 2 + 4,
-                ExrPrecision::Float => 4 * 4 + 4,
+                ExrPrecision::Half => 4 * 2 + 4 + 4 * PASS_CHANNELS,
+                ExrPrecision::Float => 4 * 4 + 4 + 4 * PASS_CHANNELS,
             },
         };
         let (w, h) = (u64::from(self.width), u64::from(self.height));

@@ -11,10 +11,13 @@
 //! the filter is on); then, while that frame is encoded,
 //! EXR's channel planes (2 a colour sample in half, 4 in float, depth and passes 4), one f32 plane copied out before conversion, and the file's
 //! bytes (at most the channels again: ZIP never doubles them); PNG's or the stream's integer
-//! samples and the file's bytes. What may be used is the smallest of the cgroup's memory.max
-//! less its memory.current, RLIMIT_AS less the process's address space now (with the arena and
-//! stack each worker thread reserves), and /proc/meminfo's MemAvailable.
+//! samples and the file's bytes. What may be used is the budget's figure (`crate::budget`: the
+//! smallest of the cgroup's memory.max less its memory.current, RLIMIT_AS less the process's
+//! address space now, and MemAvailable), with the address space each worker thread reserves
+//! for its arena and stack kept aside under RLIMIT_AS, less the meshes' hierarchies, which the
+//! run builds after this check.
 
+use crate::budget::{self, Free, size};
 use crate::output::{ExrPrecision, FileFormat};
 use crate::settings::Settings;
 
@@ -24,7 +27,7 @@ use crate::settings::Settings;
 /// progress), a run whose frames fit still failed an allocation as it finished.
 const PER_THREAD: u64 = 136 << 20;
 const OTHER_THREADS: u64 = 4;
-/// Room kept for everything else: the scene, meshes' hierarchies, buffers of rows in flight.
+/// Room kept for everything else: buffers of rows in flight, the encoders' own.
 const SLACK: u64 = 128 << 20;
 
 /// The most bytes one frame in flight takes, rendered and then encoded.
@@ -50,85 +53,67 @@ pub(crate) fn frame_bytes(settings: &Settings, format: Option<FileFormat>) -> u6
     pixels * (render + encode)
 }
 
-/// The smallest limit on this process's memory and which one it is.
-pub(crate) fn available(threads: usize) -> Option<(u64, &'static str)> {
-    let reserved = PER_THREAD * (threads as u64 + OTHER_THREADS) + SLACK;
-    let limits = [
-        (cgroup(), "the cgroup's memory.max"),
-        (address_space(), "RLIMIT_AS (ulimit -v)"),
-        (mem_available(), "MemAvailable in /proc/meminfo"),
-    ];
-    limits
-        .into_iter()
-        .filter_map(|(bytes, what)| Some((bytes?.saturating_sub(reserved), what)))
-        .min_by_key(|(bytes, _)| *bytes)
+/// What the process may take for a run of `threads` workers: the budget's figure with the
+/// address space their stacks and arenas reserve kept aside, and `SLACK` under every limit.
+pub(crate) fn available(threads: usize) -> Option<Free> {
+    let reserved = reserved(threads);
+    budget::free(reserved).map(|f| Free {
+        bytes: f.bytes.saturating_sub(SLACK),
+        ..f
+    })
 }
 
-/// How many of `window` frames fit in `available` bytes, `Err` with the figures when none does.
+/// The address space the run's threads reserve beyond the frames.
+fn reserved(threads: usize) -> u64 {
+    PER_THREAD * (threads as u64 + OTHER_THREADS)
+}
+
+/// How many of `window` frames fit in `available` bytes beside `fixed` bytes the run needs
+/// once (the meshes' hierarchies), `Err` with the figures when none does.
 pub(crate) fn fit(
     window: usize,
     per_frame: u64,
-    available: Option<(u64, &'static str)>,
+    fixed: u64,
+    threads: usize,
+    available: Option<Free>,
 ) -> Result<usize, String> {
-    let Some((bytes, what)) = available else {
+    let Some(free) = available else {
         return Ok(window);
     };
-    let fits = (bytes / per_frame.max(1)).min(window as u64) as usize;
-    match fits {
-        0 => Err(format!(
-            "one frame needs about {} (rendered, then encoded) and only {} is free under {what}; render a smaller size (--size), fewer channels, or raise the limit",
-            gb(per_frame),
-            gb(bytes)
-        )),
-        n => Ok(n),
+    let room = free.bytes.saturating_sub(fixed);
+    let fits = (room / per_frame.max(1)).min(window as u64) as usize;
+    if fits > 0 {
+        return Ok(fits);
     }
-}
-
-/// `3.22 GB`.
-pub(crate) fn gb(bytes: u64) -> String {
-    format!("{:.2} GB", bytes as f64 / 1e9)
-}
-
-/// memory.max less memory.current of this process's cgroup (v2), when it has a limit.
-fn cgroup() -> Option<u64> {
-    let line = std::fs::read_to_string("/proc/self/cgroup").ok()?;
-    let path = line.lines().find_map(|l| l.strip_prefix("0::"))?;
-    let dir = std::path::Path::new("/sys/fs/cgroup").join(path.trim_start_matches('/'));
-    let read = |name: &str| std::fs::read_to_string(dir.join(name)).ok();
-    let max: u64 = read("memory.max")?.trim().parse().ok()?;
-    let current: u64 = read("memory.current")?.trim().parse().unwrap_or(0);
-    Some(max.saturating_sub(current))
-}
-
-/// RLIMIT_AS less the address space this process has mapped now (VmSize).
-fn address_space() -> Option<u64> {
-    let mut limit = libc::rlimit {
-        rlim_cur: 0,
-        rlim_max: 0,
+    let hierarchies = match fixed {
+        0 => String::new(),
+        n => format!(" beside {} for the meshes' hierarchies", size(n)),
     };
-    // SAFETY: getrlimit only writes the struct it is given, which lives through the call.
-    if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut limit) } != 0
-        || limit.rlim_cur == libc::RLIM_INFINITY
-    {
-        return None;
-    }
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let used = kb_field(&status, "VmSize:").unwrap_or(0);
-    Some(limit.rlim_cur.saturating_sub(used))
+    let kept = match free.limit.starts_with("RLIMIT_AS") {
+        true => format!(
+            ", once {} of address space is kept for {} threads' stacks and allocator arenas",
+            size(reserved(threads)),
+            threads as u64 + OTHER_THREADS
+        ),
+        false => String::new(),
+    };
+    Err(format!(
+        "one frame needs about {} (rendered, then encoded){hierarchies}, and only {} is free under {} of {}{kept}; render a smaller size (--size), fewer channels, or raise the limit",
+        size(per_frame),
+        size(free.bytes),
+        free.limit,
+        size(free.of),
+    ))
 }
 
-fn mem_available() -> Option<u64> {
-    kb_field(
-        &std::fs::read_to_string("/proc/meminfo").ok()?,
-        "MemAvailable:",
-    )
-}
-
-/// `Key:   1234 kB` as bytes.
-fn kb_field(text: &str, key: &str) -> Option<u64> {
-    let line = text.lines().find_map(|l| l.strip_prefix(key))?;
-    let kb: u64 = line.trim().trim_end_matches("kB").trim().parse().ok()?;
-    Some(kb * 1024)
+/// The bytes the hierarchies of the scene's meshes will take once built (the run builds them
+/// after this check).
+pub(crate) fn hierarchies(scene: &crate::scene::Scene) -> u64 {
+    scene
+        .meshes
+        .iter()
+        .map(|m| budget::hierarchy_bytes(m.triangles.len() as u64))
+        .sum()
 }
 
 #[cfg(test)]
@@ -137,14 +122,26 @@ mod tests {
 
     #[test]
     fn windows_shrink_to_what_fits_and_none_is_refused() {
-        let free = |gb: u64| Some((gb << 30, "a limit"));
-        assert_eq!(fit(4, 1 << 30, free(10)), Ok(4));
-        assert_eq!(fit(4, 1 << 30, free(2)), Ok(2));
-        assert_eq!(fit(4, 1 << 30, None), Ok(4));
-        let refused = fit(4, 3 << 30, free(2)).unwrap_err();
+        let free = |gb: u64| {
+            Some(Free {
+                bytes: gb << 30,
+                limit: "a limit",
+                of: 16 << 30,
+            })
+        };
+        assert_eq!(fit(4, 1 << 30, 0, 2, free(10)), Ok(4));
+        assert_eq!(fit(4, 1 << 30, 0, 2, free(2)), Ok(2));
+        assert_eq!(fit(4, 1 << 30, 1 << 30, 2, free(2)), Ok(1));
+        assert_eq!(fit(4, 1 << 30, 0, 2, None), Ok(4));
+        let refused = fit(4, 3 << 30, 0, 2, free(2)).unwrap_err();
         assert!(
-            refused.contains("3.22 GB") && refused.contains("under a limit"),
+            refused.contains("3.22 GB") && refused.contains("under a limit of 17.18 GB"),
             "{refused}"
+        );
+        let tiny = fit(4, 12_288, 0, 2, free(0)).unwrap_err();
+        assert!(
+            tiny.contains("about 12.3 kB") && tiny.contains("only 0 bytes"),
+            "{tiny}"
         );
     }
 }

@@ -106,19 +106,22 @@ pub enum RunError {
     WorkerLost(mpsc::RecvTimeoutError),
 }
 
-/// `window` frames in flight, or as many as the memory the process may use holds (saying so),
-/// or an error before any frame starts when not even one does.
+/// `window` frames in flight, or as many as the memory the process may use holds beside the
+/// meshes' hierarchies (saying so), or an error before any frame starts when not even one does.
 fn memory_window(batch: &Batch, window: usize, progress: &Progress) -> Result<usize, RunError> {
     let format = batch.files.as_ref().map(|f| f.format);
     let per_frame = memory::frame_bytes(&batch.sequence.settings, format);
+    let hierarchies = memory::hierarchies(&batch.sequence.scene);
     let available = memory::available(batch.threads);
-    let fits = memory::fit(window, per_frame, available).map_err(RunError::Memory)?;
-    if let (true, Some((bytes, what))) = (fits < window, available) {
+    let fits = memory::fit(window, per_frame, hierarchies, batch.threads, available)
+        .map_err(RunError::Memory)?;
+    if let (true, Some(free)) = (fits < window, available) {
         progress.note(&format!(
-            "note: {fits} frame{} at a time instead of {window}: each needs about {} and {} is free under {what}",
+            "note: {fits} frame{} at a time instead of {window}: each needs about {} and {} is free under {}",
             if fits == 1 { "" } else { "s" },
-            memory::gb(per_frame),
-            memory::gb(bytes)
+            crate::budget::size(per_frame),
+            crate::budget::size(free.bytes.saturating_sub(hierarchies)),
+            free.limit
         ));
     }
     Ok(fits)

@@ -44,8 +44,9 @@ pub(super) fn direction(path: &str, v: raw::V3) -> Check<DVec3> {
 }
 
 pub(super) fn color(path: &str, v: raw::V3) -> Check<DVec3> {
-    let c = vector(path, v)?;
-    if c.min_element() < 0.0 || c.max_element() > MAX_COLOR {
+    // Not `vector`: a colour's limit is MAX_COLOR, not the squared lengths' 1e100.
+    let c = DVec3::from(v);
+    if !c.is_finite() || c.min_element() < 0.0 || c.max_element() > MAX_COLOR {
         return invalid(
             path,
             format!("components must be in [0, {MAX_COLOR}] {}", got(fmt3(v))),

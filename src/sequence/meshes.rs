@@ -15,6 +15,8 @@ use std::sync::Arc;
 pub(super) struct Meshes {
     folders: Folders,
     loaded: Vec<Arc<Mesh>>,
+    /// Per mesh, k: its positions are the file's times 2^−k (`mesh::units`).
+    exponents: Vec<i32>,
     by_path: HashMap<PathBuf, usize>,
     warnings: Vec<String>,
 }
@@ -24,6 +26,7 @@ impl Meshes {
         Meshes {
             folders: folders.clone(),
             loaded: Vec::new(),
+            exponents: Vec::new(),
             by_path: HashMap::new(),
             warnings: Vec::new(),
         }
@@ -47,7 +50,11 @@ impl Meshes {
         let index = match self.by_path.get(&key) {
             Some(&i) => i,
             None => {
-                let mesh = super::mesh::load(&file).or_else(|e| invalid(&field, e.to_string()))?;
+                let super::mesh::Loaded { mesh, exponent } =
+                    super::mesh::load(&file).or_else(|e| match e.out_of_memory {
+                        true => no_memory(&field, e.to_string()),
+                        false => invalid(&field, e.to_string()),
+                    })?;
                 if mesh.skipped > 0 {
                     self.warnings.push(format!(
                         "{field}: {} of {} triangles of {} are degenerate (zero area, a repeated index or a non-finite vertex) and were skipped",
@@ -57,11 +64,12 @@ impl Meshes {
                     ));
                 }
                 self.loaded.push(Arc::new(mesh));
+                self.exponents.push(exponent);
                 self.by_path.insert(key, self.loaded.len() - 1);
                 self.loaded.len() - 1
             }
         };
-        let place = placement(path, m, &self.loaded[index])?;
+        let place = placement(path, m, self.exponents[index], &self.loaded[index])?;
         check_reach(path, &place, &self.loaded[index])?;
         Ok(Shape::Mesh {
             mesh: index,
@@ -164,22 +172,36 @@ fn shown_folder(folder: &Path) -> String {
 /// Where `m` puts `mesh`: `scale` along the file's axes, the file's `up` axis turned to +y,
 /// `rotate`, then `fit` (a uniform factor making the largest extent `fit` scene units) and
 /// `origin` (which point of the bounds `translate` puts in place), all folded into one
-/// placement: world = translate′ + (R·U)·(scale′ ∘ p) (docs/spec/mesh.md#placement).
-fn placement(path: &str, m: &raw::Mesh, mesh: &Mesh) -> Check<Placement> {
-    let mut scale = match m.scale {
+/// placement: world = translate′ + (R·U)·(scale′ ∘ p) (docs/spec/mesh.md#placement). For a
+/// mesh whose positions were brought to f64's range by 2^−k (`mesh::units`), the scale is
+/// the one written times 2^k: the same world points, exactly.
+fn placement(path: &str, m: &raw::Mesh, k: i32, mesh: &Mesh) -> Check<Placement> {
+    let field = format!("{path}.scale");
+    // Any finite factor: what must hold is checked on the placed model below.
+    let given = match m.scale {
         None => DVec3::ONE,
-        Some(raw::Scale(v)) => vector(&format!("{path}.scale"), v)?,
+        Some(raw::Scale(v)) => finite(&field, v, "a finite number")?,
     };
-    if scale.abs().min_element() < MIN_SCALE {
+    if given.abs().min_element() == 0.0 {
         return invalid(
-            format!("{path}.scale"),
-            format!(
-                "each factor must be non-zero, at least {MIN_SCALE:e} in size {}",
-                got(num3(scale))
-            ),
+            &field,
+            format!("each factor must be non-zero {}", got(num3(given))),
         );
     }
-    let rotate = vector(&format!("{path}.rotate"), m.rotate.unwrap_or_default())?;
+    let mut scale = DVec3::new(
+        libm::scalbn(given.x, k),
+        libm::scalbn(given.y, k),
+        libm::scalbn(given.z, k),
+    );
+    if scale.abs().min_element() < MIN_SCALE {
+        return invalid(&field, too_small(mesh, k, given));
+    }
+    // Any finite angle: `sin_cos` reduces it exactly.
+    let rotate = finite(
+        &format!("{path}.rotate"),
+        m.rotate.unwrap_or_default(),
+        "a finite number of degrees",
+    )?;
     let up = up_axis(&format!("{path}.up"), m.up.as_deref())?;
     let rotation = rotation(rotate) * up;
     let mut translate = vector(
@@ -223,6 +245,38 @@ fn placement(path: &str, m: &raw::Mesh, mesh: &Mesh) -> Check<Placement> {
         rotation,
         translate,
     })
+}
+
+/// Why a scale is refused: under 1e-100, or for a file in other units, a placed model under
+/// 1e-100 times the size of one in units of about 1.
+fn too_small(mesh: &Mesh, k: i32, scale: DVec3) -> String {
+    if k == 0 {
+        return format!(
+            "each factor must be non-zero, at least {MIN_SCALE:e} in size {}",
+            got(num3(scale))
+        );
+    }
+    let (lo, hi) = mesh.bounds();
+    let reach = libm::scalbn(lo.abs().max(hi.abs()).max_element(), k);
+    format!(
+        "{}'s coordinates reach {reach:.2e}, so this scale makes the placed model about {:.2e} across; it must be at least {MIN_SCALE:e} across, as f64 cannot trace a smaller one among coordinates up to ±{MAX_MAGNITUDE:e} {}",
+        mesh.file.display(),
+        reach * scale.abs().min_element(),
+        got(num3(scale))
+    )
+}
+
+/// Each of three numbers finite (`what` says what they must be).
+fn finite(field: &str, v: raw::V3, what: &str) -> Check<DVec3> {
+    for (i, a) in v.iter().enumerate() {
+        if !a.is_finite() {
+            return invalid(
+                format!("{field}[{i}]"),
+                format!("must be {what} {}", got_num(*a)),
+            );
+        }
+    }
+    Ok(DVec3::from(v))
 }
 
 /// The rotation turning the file's `up` axis (`y` by default; `z`, `x`, or any of them
@@ -278,7 +332,9 @@ pub(crate) fn placed_bounds(
     )
 }
 
-/// The smallest scale factor accepted: scaled coordinates must stay normal f64 numbers.
+/// The smallest factor of a scale, in units of the model's own size (its positions' largest
+/// magnitude brought to [0.5, 1) when outside [2^−32, 2^32]): scaled coordinates must stay
+/// normal f64 numbers, as spheres' radii do.
 const MIN_SCALE: f64 = 1e-100;
 
 /// Rz · Ry · Rx for angles in degrees, right-handed (counter-clockwise seen from the positive

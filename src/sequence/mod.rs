@@ -33,6 +33,7 @@ pub use settings::{
 pub(crate) use settings::{
     Explicit, MAX_SAMPLES, default_sampling, denoise, exposure, output_pattern, preset,
 };
+pub(crate) use textures::decode as decode_texture;
 pub(crate) use timeline::{MAX_FIRST_FRAME, rolls_over};
 
 use crate::camera::{Camera, Degenerate, Pose};
@@ -116,6 +117,15 @@ pub enum LoadError {
     },
     #[error("{file}: {size}; sequence files are limited to {} MiB", MAX_FILE_BYTES >> 20)]
     TooLarge { file: PathBuf, size: String },
+    /// A texture or mesh the file names does not fit in the memory the process may take: the
+    /// file is valid, the machine (or its limit) too small, so the exit code is 1, not 2.
+    #[error("{file}:{line}:{col}: {message}")]
+    Memory {
+        file: PathBuf,
+        line: usize,
+        col: usize,
+        message: String,
+    },
 }
 
 /// A rejected value: the YAML path of the field and what is wrong with it.
@@ -123,6 +133,8 @@ pub enum LoadError {
 struct Invalid {
     path: String,
     message: String,
+    /// Refused for want of memory (`crate::budget`), not for what the file says.
+    memory: bool,
 }
 
 type Check<T> = Result<T, Invalid>;
@@ -131,6 +143,16 @@ fn invalid<T>(path: impl Into<String>, message: impl Into<String>) -> Check<T> {
     Err(Invalid {
         path: path.into(),
         message: message.into(),
+        memory: false,
+    })
+}
+
+/// `invalid`, for a value the file may hold but this process has no memory for.
+fn no_memory<T>(path: impl Into<String>, message: impl Into<String>) -> Check<T> {
+    Err(Invalid {
+        path: path.into(),
+        message: message.into(),
+        memory: true,
     })
 }
 
@@ -254,11 +276,19 @@ pub(crate) fn parse_drawable(
     let located = |e: Invalid| {
         let (line, col) = locate::locate(text, &e.path);
         let message = clip(format!("{}: {}", e.path, e.message));
-        LoadError::Invalid {
-            file: file.to_owned(),
-            line,
-            col,
-            message,
+        match e.memory {
+            true => LoadError::Memory {
+                file: file.to_owned(),
+                line,
+                col,
+                message,
+            },
+            false => LoadError::Invalid {
+                file: file.to_owned(),
+                line,
+                col,
+                message,
+            },
         }
     };
     let base = match is_stdin(file) {

@@ -26,12 +26,14 @@ pub struct Sequence {
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Render {
-    pub width: Option<u64>,
-    pub height: Option<u64>,
-    pub max_depth: Option<u64>,
+    // Whole numbers whose least value is 1 are read signed, so that `-1` is refused by their
+    // own check, with their range, rather than by serde as "0 or more".
+    pub width: Option<i64>,
+    pub height: Option<i64>,
+    pub max_depth: Option<i64>,
     pub background: Option<Background>,
     pub depth: Option<bool>,
-    pub samples: Option<u64>,
+    pub samples: Option<i64>,
     pub adaptive: Option<Adaptive>,
     pub quality: Option<Quality>,
     pub sampler: Option<Sampler>,
@@ -94,7 +96,7 @@ impl<'de> Deserialize<'de> for Background {
 #[serde(deny_unknown_fields)]
 pub struct Adaptive {
     pub threshold: Option<f64>,
-    pub max_samples: Option<u64>,
+    pub max_samples: Option<i64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, clap::ValueEnum)]
@@ -409,7 +411,7 @@ pub struct SpotLight {
 pub struct SphereLight {
     pub center: V3,
     pub radius: f64,
-    pub samples: Option<u64>,
+    pub samples: Option<i64>,
     #[serde(default)]
     pub ambient: V3,
     pub diffuse: V3,
@@ -422,7 +424,7 @@ pub struct RectLight {
     pub corner: V3,
     pub edge_u: V3,
     pub edge_v: V3,
-    pub samples: Option<u64>,
+    pub samples: Option<i64>,
     #[serde(default)]
     pub ambient: V3,
     pub diffuse: V3,

@@ -320,10 +320,10 @@ pub(crate) const DEFAULT_LIGHT_SAMPLES: u32 = 16;
 pub(crate) const MAX_LIGHT_SAMPLES: u64 = 4096;
 
 /// An area light's `samples`: 1 to 4096, 16 when absent.
-fn light_samples(path: &str, n: Option<u64>) -> Check<u32> {
+fn light_samples(path: &str, n: Option<i64>) -> Check<u32> {
     match n {
         None => Ok(DEFAULT_LIGHT_SAMPLES),
-        Some(n @ 1..=MAX_LIGHT_SAMPLES) => Ok(n as u32),
+        Some(n) if (1..=MAX_LIGHT_SAMPLES as i64).contains(&n) => Ok(n as u32),
         Some(n) => invalid(
             format!("{path}.samples"),
             format!(
@@ -349,14 +349,26 @@ pub(super) fn sphere_light(path: &str, s: &raw::SphereLight) -> Check<Light> {
     })
 }
 
+/// edge_u × edge_v and its length; where that length overflows or underflows (edges near
+/// 1e100 or 1e-100), the same direction from the edges each divided by its largest component,
+/// so perpendicular edges of any length are never taken for parallel ones.
+fn area_normal(u: DVec3, v: DVec3) -> (DVec3, f64) {
+    let cross = u.cross(v);
+    let length = cross.length();
+    if length > 0.0 && length.is_finite() {
+        return (cross, length);
+    }
+    let cross = (u / u.abs().max_element()).cross(v / v.abs().max_element());
+    (cross, cross.length())
+}
+
 /// A rect light: its edges must span a parallelogram whose normal edge_u × edge_v has a
 /// finite, non-zero length (so it can be normalised).
 pub(super) fn rect_light(path: &str, r: &raw::RectLight) -> Check<Light> {
     let corner = vector(&format!("{path}.corner"), r.corner)?;
     let edge_u = direction(&format!("{path}.edge_u"), r.edge_u)?;
     let edge_v = direction(&format!("{path}.edge_v"), r.edge_v)?;
-    let cross = edge_u.cross(edge_v);
-    let length = cross.length();
+    let (cross, length) = area_normal(edge_u, edge_v);
     if !(length > 0.0 && length.is_finite()) {
         return invalid(
             format!("{path}.edge_v"),

@@ -139,7 +139,7 @@ fn adaptive(a: &raw::Adaptive) -> Check<Adaptive> {
             "must be greater than 0 (got 0)",
         );
     }
-    let max_samples = samples(a.max_samples.unwrap_or(DEFAULT_MAX_SAMPLES))
+    let max_samples = samples(a.max_samples.unwrap_or(DEFAULT_MAX_SAMPLES as i64))
         .or_else(|m| invalid("render.adaptive.max_samples", m))?;
     Ok(Adaptive {
         threshold: threshold as f32,
@@ -257,8 +257,8 @@ pub(crate) fn preset(s: &mut Settings, q: Quality, film: Film) {
     s.max_depth = depth;
 }
 
-pub(super) fn samples(v: u64) -> Result<u32, String> {
-    if (1..=MAX_SAMPLES).contains(&v) {
+pub(super) fn samples(v: i64) -> Result<u32, String> {
+    if (1..=MAX_SAMPLES as i64).contains(&v) {
         Ok(v as u32)
     } else {
         Err(format!(
@@ -277,16 +277,16 @@ pub(super) fn pixels(w: u32, h: u32) -> Result<(), String> {
     Ok(())
 }
 
-pub(super) fn dimension(v: u64) -> Result<u32, String> {
-    if (1..=MAX_DIMENSION).contains(&v) {
+pub(super) fn dimension(v: i64) -> Result<u32, String> {
+    if (1..=MAX_DIMENSION as i64).contains(&v) {
         Ok(v as u32)
     } else {
         Err(format!("must be 1 to {MAX_DIMENSION} pixels (got {v})"))
     }
 }
 
-pub(super) fn max_depth(v: u64) -> Result<u32, String> {
-    if (1..=MAX_DEPTH).contains(&v) {
+pub(super) fn max_depth(v: i64) -> Result<u32, String> {
+    if (1..=MAX_DEPTH as i64).contains(&v) {
         Ok(v as u32)
     } else {
         Err(format!(

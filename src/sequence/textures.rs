@@ -8,6 +8,7 @@
 //! ```
 
 use super::*;
+use crate::budget::OutOfMemory;
 use crate::scene::{Image, Level, Sky, Texture};
 use glam::DVec2;
 use std::collections::HashMap;
@@ -26,6 +27,8 @@ const MIN_CELL: f64 = 1e-100;
 pub(super) struct Textures {
     folders: super::meshes::Folders,
     by_path: HashMap<(PathBuf, bool), Arc<Image>>,
+    /// Bytes the images read so far hold (texels and pyramids), for a refusal's figures.
+    held: u64,
 }
 
 impl Textures {
@@ -33,6 +36,7 @@ impl Textures {
         Textures {
             folders: folders.clone(),
             by_path: HashMap::new(),
+            held: 0,
         }
     }
 
@@ -89,7 +93,20 @@ impl Textures {
         if let Some(i) = self.by_path.get(&key) {
             return Ok(i.clone());
         }
-        let image = Arc::new(load(&path, linear).or_else(|m| invalid(f, m))?);
+        let image = load(&path, linear).or_else(|e| match e {
+            Refusal::File(m) => invalid(f, m),
+            Refusal::Memory(mut e) => {
+                if self.held > 0 {
+                    e.taken = Some(format!(
+                        "the textures read before it hold {}",
+                        crate::budget::size(self.held)
+                    ));
+                }
+                no_memory(f, e.to_string())
+            }
+        })?;
+        self.held += image_bytes(&image.levels);
+        let image = Arc::new(image);
         self.by_path.insert(key, image.clone());
         Ok(image)
     }
@@ -189,29 +206,56 @@ fn mean(t: &Texture) -> DVec3 {
     }
 }
 
-/// Reads and decodes `path` (PNG or EXR by its name), and builds the pyramid.
-fn load(path: &Path, linear: bool) -> Result<Image, String> {
+/// Why an image was not read: the file (its message), or the memory it would need.
+#[derive(Debug)]
+pub(crate) enum Refusal {
+    File(String),
+    Memory(OutOfMemory),
+}
+
+impl From<String> for Refusal {
+    fn from(m: String) -> Refusal {
+        Refusal::File(m)
+    }
+}
+
+impl From<OutOfMemory> for Refusal {
+    fn from(e: OutOfMemory) -> Refusal {
+        Refusal::Memory(e)
+    }
+}
+
+/// The bytes `levels` hold.
+fn image_bytes(levels: &[Level]) -> u64 {
+    levels.iter().map(|l| l.texels.len() as u64 * 12).sum()
+}
+
+/// The bytes a w×h level's pyramid above it will hold: each level a quarter of the one below,
+/// rounded up, so at most a third of level 0 and a texel a level.
+fn pyramid_bytes(width: u32, height: u32) -> u64 {
+    (u64::from(width) * u64::from(height) / 3 + 64) * 12
+}
+
+/// Reads and decodes `path` (PNG or EXR by its name), and builds the pyramid; the memory
+/// budget admits each step before it allocates.
+fn load(path: &Path, linear: bool) -> Result<Image, Refusal> {
     let started = std::time::Instant::now();
     let name = path.to_string_lossy().to_lowercase();
     let png = name.ends_with(".png");
     if !png && !name.ends_with(".exr") {
-        return Err("unknown image format: the file name must end in .png or .exr".into());
+        return Err(Refusal::File(
+            "unknown image format: the file name must end in .png or .exr".into(),
+        ));
     }
     if linear && !png {
-        return Err("`encoding` applies to PNG images; EXR values are linear already".into());
+        return Err(Refusal::File(
+            "`encoding` applies to PNG images; EXR values are linear already".into(),
+        ));
     }
-    let bytes = read_regular(path)?;
-    let (width, height, texels) = match png {
-        true => png_texels(&bytes, linear)?,
-        false => exr_texels(&bytes)?,
-    };
+    let bytes = read_regular(path, png)?;
     Ok(Image {
         file: path.to_owned(),
-        levels: pyramid(Level {
-            width,
-            height,
-            texels,
-        }),
+        levels: decode(&bytes, png, linear, &path.display().to_string())?,
         // The file's bytes, then the encoding: the file alone does not say how it is read.
         digest: mesh::fnv1a_on(mesh::fnv1a(&bytes), &[u8::from(linear)]),
         bytes: bytes.len() as u64,
@@ -219,10 +263,33 @@ fn load(path: &Path, linear: bool) -> Result<Image, String> {
     })
 }
 
+/// A PNG or EXR file's bytes as the levels of its pyramid; `shown` names it in messages.
+pub(crate) fn decode(
+    bytes: &[u8],
+    png: bool,
+    linear: bool,
+    shown: &str,
+) -> Result<Vec<Level>, Refusal> {
+    let (width, height, texels) = match png {
+        true => png_texels(bytes, linear, shown)?,
+        false => exr_texels(bytes, shown)?,
+    };
+    crate::budget::admit(pyramid_bytes(width, height), || {
+        format!("the mip pyramid of {shown} ({width}x{height})")
+    })?;
+    Ok(pyramid(Level {
+        width,
+        height,
+        texels,
+    }))
+}
+
 /// The file's bytes: a regular file only (a FIFO must not hang the load), at most
-/// `MAX_TEXTURE_BYTES`.
-fn read_regular(path: &Path) -> Result<Vec<u8>, String> {
+/// `MAX_TEXTURE_BYTES`, that starts as a PNG or an EXR file does (a sparse or foreign file is
+/// refused after 8 bytes, not read whole), read once the memory budget admits its size.
+fn read_regular(path: &Path, png: bool) -> Result<Vec<u8>, Refusal> {
     use crate::regular::{self, Links, Refused};
+    use std::io::Read;
     let shown = path.display();
     let (f, meta) = regular::open(path, Links::Follow).map_err(|e| match e {
         Refused::NotRegular(what) => {
@@ -232,13 +299,30 @@ fn read_regular(path: &Path) -> Result<Vec<u8>, String> {
         Refused::Io(e) => format!("cannot read {shown}: {e}"),
     })?;
     if meta.len() > MAX_TEXTURE_BYTES {
-        return Err(format!(
+        return Err(Refusal::File(format!(
             "{shown} is {} bytes; texture files are limited to 1 GiB",
             meta.len()
-        ));
+        )));
     }
-    regular::read_at_most(&f, meta.len(), MAX_TEXTURE_BYTES + 1)
-        .map_err(|e| format!("cannot read {shown}: {e}"))
+    let (magic, kind): (&[u8], &str) = match png {
+        true => (b"\x89PNG\r\n\x1a\n", "PNG"),
+        false => (&[0x76, 0x2f, 0x31, 0x01], "EXR"),
+    };
+    let mut start = vec![0u8; magic.len()];
+    let read = (&f).take(magic.len() as u64).read(&mut start);
+    if read.map_err(|e| format!("cannot read {shown}: {e}"))? < magic.len() || start != magic {
+        return Err(Refusal::File(format!(
+            "unreadable {kind}: {shown} does not start as a {kind} file does"
+        )));
+    }
+    let mut bytes = start;
+    crate::budget::grow(&mut bytes, meta.len() as usize, || {
+        format!("reading {shown}")
+    })?;
+    (&f).take(MAX_TEXTURE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("cannot read {shown}: {e}"))?;
+    Ok(bytes)
 }
 
 fn check_size(width: u64, height: u64) -> Result<(u32, u32), String> {
@@ -254,27 +338,65 @@ fn check_size(width: u64, height: u64) -> Result<(u32, u32), String> {
 }
 
 /// 8- or 16-bit PNG (grey, grey+alpha, RGB, RGBA or palette; alpha ignored) as linear RGB:
-/// each value v of bit depth b is x = v / (2^b − 1), sRGB-decoded unless `linear`.
-fn png_texels(bytes: &[u8], linear: bool) -> Result<(u32, u32, Vec<[f32; 3]>), String> {
-    use image::ImageDecoder;
+/// each value v of bit depth b is x = v / (2^b − 1), sRGB-decoded unless `linear`. The
+/// decoded samples and the texels are admitted by the memory budget before either exists.
+fn png_texels(
+    bytes: &[u8],
+    linear: bool,
+    shown: &str,
+) -> Result<(u32, u32, Vec<[f32; 3]>), Refusal> {
+    use image::{ColorType, ImageDecoder};
     let unreadable = |e: image::ImageError| format!("unreadable PNG: {e}");
-    let decoder =
+    let mut decoder =
         image::codecs::png::PngDecoder::new(std::io::Cursor::new(bytes)).map_err(unreadable)?;
     let (w, h) = decoder.dimensions();
     let (w, h) = check_size(u64::from(w), u64::from(h))?;
-    let mut decoder = decoder;
+    let samples = decoder.total_bytes();
+    let texels = u64::from(w) * u64::from(h) * 12;
+    crate::budget::admit(samples + texels, || format!("decoding {shown} ({w}x{h})"))?;
     decoder
         .set_limits(image::Limits::no_limits())
         .map_err(unreadable)?;
-    let rgb = image::DynamicImage::from_decoder(decoder)
-        .map_err(unreadable)?
-        .into_rgb16();
+    let color = decoder.color_type();
+    let mut raw = Vec::new();
+    crate::budget::grow(&mut raw, samples as usize, || format!("decoding {shown}"))?;
+    raw.resize(samples as usize, 0);
+    decoder.read_image(&mut raw).map_err(unreadable)?;
+    let (channels, wide) = match color {
+        ColorType::L8 => (1, false),
+        ColorType::La8 => (2, false),
+        ColorType::Rgb8 => (3, false),
+        ColorType::Rgba8 => (4, false),
+        ColorType::L16 => (1, true),
+        ColorType::La16 => (2, true),
+        ColorType::Rgb16 => (3, true),
+        ColorType::Rgba16 => (4, true),
+        other => {
+            return Err(Refusal::File(format!(
+                "unreadable PNG: colour type {other:?}"
+            )));
+        }
+    };
     let table = decode_table(linear);
-    let texels = rgb
-        .pixels()
-        .map(|p| p.0.map(|v| table[usize::from(v)]))
-        .collect();
-    Ok((w, h, texels))
+    // 8-bit codes as 16-bit ones (v·257, the same fraction); 16-bit samples in native order.
+    let code = |px: &[u8], c: usize| match wide {
+        true => usize::from(u16::from_ne_bytes([px[2 * c], px[2 * c + 1]])),
+        false => usize::from(px[c]) * 257,
+    };
+    let size = channels * if wide { 2 } else { 1 };
+    let mut out = Vec::new();
+    crate::budget::grow(&mut out, (w as usize) * (h as usize), || {
+        format!("the texels of {shown}")
+    })?;
+    out.extend(raw.chunks_exact(size).map(|px| {
+        // Grey is each of R, G and B; alpha is dropped.
+        let rgb = match channels {
+            1 | 2 => [0, 0, 0],
+            _ => [0, 1, 2],
+        };
+        rgb.map(|c| table[code(px, c)])
+    }));
+    Ok((w, h, out))
 }
 
 /// The linear value of each 16-bit code (8-bit codes arrive as v·257, the same fraction).
@@ -297,16 +419,19 @@ fn decode_table(linear: bool) -> Vec<f32> {
 /// The first part of an EXR with channels named R, G and B (others are ignored; alpha too),
 /// as f32 (values that are not finite, or negative, are refused: a texture is a
 /// reflectance).
-fn exr_texels(bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>), String> {
+fn exr_texels(bytes: &[u8], shown: &str) -> Result<(u32, u32, Vec<[f32; 3]>), Refusal> {
     use exr::prelude::*;
     let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
         .map_err(|e| format!("unreadable EXR: {e}"))?;
     // Every part is sized before any is decoded: the one read is the first with R, G and B
     // channels, and none may be larger than a texture can be.
+    let mut largest = 0;
     for header in &meta.headers {
         let size = header.layer_size;
         check_size(size.width() as u64, size.height() as u64)?;
+        largest = largest.max(size.width() as u64 * size.height() as u64);
     }
+    crate::budget::admit(largest * 12, || format!("decoding {shown}"))?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -326,10 +451,10 @@ fn exr_texels(bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>), String> {
     let (w, h) = check_size(size.width() as u64, size.height() as u64)?;
     let texels = image.layer_data.channel_data.pixels.1;
     if texels.iter().flatten().any(|v| !v.is_finite() || *v < 0.0) {
-        return Err(
+        return Err(Refusal::File(
             "the EXR holds a negative, infinite or NaN value; a texture holds reflectances ≥ 0"
                 .into(),
-        );
+        ));
     }
     Ok((w, h, texels))
 }

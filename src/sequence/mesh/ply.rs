@@ -1,21 +1,31 @@
 //! PLY (ASCII, binary little- and big-endian): the `vertex` element's x y z, optional nx ny nz
 //! and u v (or s t, texture_u texture_v), and the `face` element's `vertex_indices` (or
-//! `vertex_index`) list of any length. Other elements and properties are read past.
+//! `vertex_index`) list of any length, whichever element comes first. Other elements and
+//! properties are read past.
+//!
+//! The header is read by its grammar, one line at a time: a line is a keyword and its words,
+//! and only the line `end_header` (spaces around it allowed) ends it, however long the header
+//! and whatever its comments or property names contain. A line that starts with no PLY keyword
+//! (old Blender exporters wrote one without `comment`) is read as a comment, with a note. An
+//! ASCII body has one element per line, so a row with too many or too few values is named
+//! itself. What a header declares is checked against what the file can hold before anything is
+//! allocated for it.
 
-use super::{Soup, fan};
-use glam::{DVec2, DVec3};
+use super::input::Input;
+use super::ply_rows::{Body, Faces, skip, vertices};
+use super::{Fail, Soup};
+use crate::budget;
+use std::io::BufRead;
 
-type Fail = (Option<String>, String);
-
-#[derive(Clone, Copy, PartialEq)]
-enum Format {
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub(super) enum Format {
     Ascii,
     Little,
     Big,
 }
 
 #[derive(Clone, Copy, PartialEq, Debug)]
-enum Scalar {
+pub(super) enum Scalar {
     I8,
     U8,
     I16,
@@ -41,7 +51,7 @@ impl Scalar {
         })
     }
 
-    fn size(self) -> usize {
+    pub(super) fn size(self) -> u64 {
         match self {
             Scalar::I8 | Scalar::U8 => 1,
             Scalar::I16 | Scalar::U16 => 2,
@@ -51,296 +61,240 @@ impl Scalar {
     }
 }
 
-struct Property {
-    name: String,
+pub(super) struct Property {
+    pub(super) name: String,
     /// `Some(count type)` for a list.
-    list: Option<Scalar>,
-    ty: Scalar,
+    pub(super) list: Option<Scalar>,
+    pub(super) ty: Scalar,
 }
 
-struct Element {
-    name: String,
-    count: u64,
-    props: Vec<Property>,
+pub(super) struct Element {
+    pub(super) name: String,
+    pub(super) count: u64,
+    pub(super) props: Vec<Property>,
+    /// The header line that declares it.
+    pub(super) line: usize,
 }
 
-/// Reads values one at a time from the body, in the file's format.
-struct Body<'a> {
-    bytes: &'a [u8],
-    at: usize,
-    format: Format,
-}
-
-impl Body<'_> {
-    fn value(&mut self, ty: Scalar) -> Option<f64> {
-        if self.format == Format::Ascii {
-            let rest = &self.bytes[self.at..];
-            let start = rest.iter().position(|b| !b.is_ascii_whitespace())?;
-            let len = rest[start..]
-                .iter()
-                .position(|b| b.is_ascii_whitespace())
-                .unwrap_or(rest.len() - start);
-            self.at += start + len;
-            let word = std::str::from_utf8(&rest[start..start + len]).ok()?;
-            return word.parse::<f64>().ok();
-        }
-        let n = ty.size();
-        let b = self.bytes.get(self.at..self.at + n)?;
-        self.at += n;
-        let mut a = [0u8; 8];
-        a[..n].copy_from_slice(b);
-        if self.format == Format::Big {
-            a[..n].reverse();
-        }
-        Some(match ty {
-            Scalar::I8 => f64::from(a[0] as i8),
-            Scalar::U8 => f64::from(a[0]),
-            Scalar::I16 => f64::from(i16::from_le_bytes([a[0], a[1]])),
-            Scalar::U16 => f64::from(u16::from_le_bytes([a[0], a[1]])),
-            Scalar::I32 => f64::from(i32::from_le_bytes([a[0], a[1], a[2], a[3]])),
-            Scalar::U32 => f64::from(u32::from_le_bytes([a[0], a[1], a[2], a[3]])),
-            Scalar::F32 => f64::from(f32::from_le_bytes([a[0], a[1], a[2], a[3]])),
-            Scalar::F64 => f64::from_le_bytes(a),
-        })
+impl Element {
+    /// The fewest bytes a row can take: binary, every scalar and every list's count; ASCII,
+    /// one character and one separator (or the line's end) a value.
+    fn min_row_bytes(&self, format: Format) -> u64 {
+        self.props
+            .iter()
+            .map(|p| match format {
+                Format::Ascii => 2,
+                _ => p.list.unwrap_or(p.ty).size(),
+            })
+            .sum()
     }
 }
 
-pub(super) fn read(bytes: &[u8]) -> Result<Soup, Fail> {
-    let (format, elements, body) = header(bytes)?;
+struct Header {
+    format: Format,
+    elements: Vec<Element>,
+    notes: Vec<String>,
+}
+
+pub(super) fn read<R: BufRead>(input: &mut Input<R>) -> Result<Soup, Fail> {
+    let header = header(input)?;
     let mut body = Body {
-        bytes,
-        at: body,
-        format,
+        input,
+        format: header.format,
+        values: Vec::new(),
+        next: 0,
     };
-    let mut soup = Soup::default();
-    let mut faces_seen = false;
-    for e in &elements {
+    let mut soup = Soup {
+        notes: header.notes,
+        ..Soup::default()
+    };
+    let mut faces = Faces::default();
+    for e in &header.elements {
+        fits(e, header.format, body.input.left())?;
         match e.name.as_str() {
             "vertex" => vertices(e, &mut body, &mut soup)?,
-            "face" => {
-                faces_seen = true;
-                faces(e, &mut body, &mut soup)?;
-            }
+            "face" => faces.read(e, &mut body, &mut soup)?,
             _ => skip(e, &mut body)?,
         }
     }
-    if !faces_seen {
-        return Err((None, "the file has no `face` element".into()));
-    }
+    faces.finish(&header.elements, &mut soup)?;
     Ok(soup)
 }
 
-fn header(bytes: &[u8]) -> Result<(Format, Vec<Element>, usize), Fail> {
-    let fail = |m: &str| Err((Some("header".to_string()), m.to_string()));
-    let end = find(bytes, b"end_header").ok_or((
-        Some("header".to_string()),
-        "no `end_header` line: not a PLY file, or a truncated one".to_string(),
-    ))?;
-    let mut body = end + b"end_header".len();
-    // The header ends with the line: `\n` (or `\r\n`).
-    if bytes.get(body) == Some(&b'\r') {
-        body += 1;
+/// A binary element's rows take at least `min_row_bytes` each: a header that declares more than
+/// the file holds is refused before anything is read or allocated for it, naming the first row
+/// that cannot be there (exact when the rows have no lists). ASCII rows are lines, read until
+/// the file ends, and their arrays are sized by what the file can hold (`capacity`).
+fn fits(e: &Element, format: Format, left: u64) -> Result<(), Fail> {
+    let row = e.min_row_bytes(format);
+    if format == Format::Ascii || row.saturating_mul(e.count) <= left {
+        return Ok(());
     }
-    if bytes.get(body) == Some(&b'\n') {
-        body += 1;
-    }
-    let Ok(text) = std::str::from_utf8(&bytes[..end]) else {
-        return fail("the header is not ASCII text");
+    let exact = e.props.iter().all(|p| p.list.is_none());
+    let where_ = match exact {
+        true => format!("{} {}", e.name, left / row),
+        false => format!("header line {}", e.line),
     };
-    let mut lines = text.lines();
-    if lines.next().map(str::trim) != Some("ply") {
-        return fail("the file does not start with `ply`");
+    Err(Fail::at(
+        where_,
+        format!(
+            "the file ends early: the header declares {} `{}` rows of at least {row} bytes, and {left} bytes are left",
+            e.count, e.name
+        ),
+    ))
+}
+
+/// How many rows of `e` an array may be sized for up front: what the header declares, at most
+/// what the bytes left can hold.
+pub(super) fn capacity(e: &Element, format: Format, left: u64) -> usize {
+    let most = left / e.min_row_bytes(format).max(1) + 1;
+    usize::try_from(e.count.min(most)).unwrap_or(usize::MAX)
+}
+
+/// A header line's refusal.
+pub(super) fn at_line(line: usize, message: impl Into<String>) -> Fail {
+    Fail::at(format!("header line {line}"), message)
+}
+
+fn header<R: BufRead>(input: &mut Input<R>) -> Result<Header, Fail> {
+    let start = input.peek(4)?;
+    let magic =
+        start.get(..3) == Some(b"ply") && start.get(3).is_none_or(|b| b.is_ascii_whitespace());
+    if !magic {
+        return Err(Fail::at("header", "the file does not start with `ply`"));
     }
+    input.line()?;
     let mut format = None;
     let mut elements: Vec<Element> = Vec::new();
-    for line in lines {
-        let w: Vec<&str> = line.split_whitespace().collect();
+    let mut notes = Vec::new();
+    loop {
+        let n = input.line_number + 1;
+        let Some(bytes) = input.line()? else {
+            return Err(Fail::at(
+                "header",
+                "no `end_header` line: not a PLY file, or a truncated one",
+            ));
+        };
+        let first = bytes
+            .split(|b| b.is_ascii_whitespace())
+            .find(|w| !w.is_empty());
+        match first {
+            None | Some(b"comment") | Some(b"obj_info") => continue,
+            Some(b"end_header") | Some(b"format") | Some(b"element") | Some(b"property") => {}
+            Some(_) => {
+                if notes.is_empty() {
+                    notes.push(format!(
+                        "header line {n} starts with no PLY keyword and was read as a comment: `{}`",
+                        super::quoted(String::from_utf8_lossy(bytes).trim())
+                    ));
+                }
+                continue;
+            }
+        }
+        let Ok(text) = std::str::from_utf8(bytes) else {
+            return Err(at_line(n, "is not text"));
+        };
+        let w: Vec<&str> = text.split_ascii_whitespace().collect();
         match w.as_slice() {
-            ["format", f, _] => {
-                format = Some(match *f {
-                    "ascii" => Format::Ascii,
-                    "binary_little_endian" => Format::Little,
-                    "binary_big_endian" => Format::Big,
-                    _ => return fail(&format!("unknown format `{f}`")),
-                })
-            }
-            ["comment", ..] | ["obj_info", ..] | [] => {}
-            ["element", name, count] => {
-                let Ok(count) = count.parse() else {
-                    return fail(&format!("element `{name}` has no count (got `{count}`)"));
-                };
-                elements.push(Element {
-                    name: name.to_string(),
-                    count,
-                    props: Vec::new(),
-                });
-            }
-            ["property", "list", c, t, name] => {
-                let (Some(c), Some(t)) = (Scalar::parse(c), Scalar::parse(t)) else {
-                    return fail(&format!("property `{name}` has an unknown type"));
-                };
-                let Some(e) = elements.last_mut() else {
-                    return fail("a property before any element");
-                };
-                e.props.push(Property {
-                    name: name.to_string(),
-                    list: Some(c),
-                    ty: t,
-                });
-            }
-            ["property", t, name] => {
-                let Some(t) = Scalar::parse(t) else {
-                    return fail(&format!("property `{name}` has unknown type `{t}`"));
-                };
-                let Some(e) = elements.last_mut() else {
-                    return fail("a property before any element");
-                };
-                e.props.push(Property {
-                    name: name.to_string(),
-                    list: None,
-                    ty: t,
-                });
-            }
-            _ => return fail(&format!("cannot read the header line `{}`", line.trim())),
+            ["end_header"] => break,
+            ["format", f, _] => format = Some(format_of(f, n)?),
+            ["element", name, count] => element(name, count, n, &mut elements)?,
+            ["property", rest @ ..] => property(rest, n, elements.last_mut())?,
+            _ => return Err(at_line(n, format!("cannot read `{}`", text.trim()))),
         }
     }
     let Some(format) = format else {
-        return fail("no `format` line");
+        return Err(Fail::at("header", "no `format` line"));
     };
-    Ok((format, elements, body))
+    Ok(Header {
+        format,
+        elements,
+        notes,
+    })
 }
 
-fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
-    // The header is short; stop looking after 64 KiB of it.
-    let hay = &hay[..hay.len().min(1 << 16)];
-    hay.windows(needle.len()).position(|w| w == needle)
+fn format_of(f: &str, n: usize) -> Result<Format, Fail> {
+    Ok(match f {
+        "ascii" => Format::Ascii,
+        "binary_little_endian" => Format::Little,
+        "binary_big_endian" => Format::Big,
+        _ => return Err(at_line(n, format!("unknown format `{f}`"))),
+    })
 }
 
-fn truncated(what: &str, i: u64) -> Fail {
-    (
-        Some(format!("{what} {i}")),
-        "the file ends early, or a value is not a number".into(),
-    )
-}
-
-fn vertices(e: &Element, body: &mut Body, soup: &mut Soup) -> Result<(), Fail> {
-    let at = |names: &[&str]| {
-        e.props
-            .iter()
-            .position(|p| names.contains(&p.name.as_str()))
-    };
-    let (Some(x), Some(y), Some(z)) = (at(&["x"]), at(&["y"]), at(&["z"])) else {
-        return Err((Some("header".into()), "`vertex` needs x, y and z".into()));
-    };
-    let normal = match (at(&["nx"]), at(&["ny"]), at(&["nz"])) {
-        (Some(a), Some(b), Some(c)) => Some([a, b, c]),
-        _ => None,
-    };
-    let uv = match (
-        at(&["u", "s", "texture_u", "texture_s"]),
-        at(&["v", "t", "texture_v", "texture_t"]),
-    ) {
-        (Some(a), Some(b)) => Some([a, b]),
-        _ => None,
-    };
-    let n = usize::try_from(e.count).unwrap_or(usize::MAX);
-    let cap = n.min(body.bytes.len() / 3 + 1);
-    soup.positions.reserve(cap);
-    let mut normals = normal.map(|_| Vec::with_capacity(cap));
-    let mut uvs = uv.map(|_| Vec::with_capacity(cap));
-    let mut values = vec![0.0; e.props.len()];
-    for i in 0..e.count {
-        for (k, p) in e.props.iter().enumerate() {
-            values[k] = match p.list {
-                None => body.value(p.ty).ok_or_else(|| truncated("vertex", i))?,
-                Some(c) => {
-                    let len = body.value(c).ok_or_else(|| truncated("vertex", i))?;
-                    for _ in 0..len as u64 {
-                        body.value(p.ty).ok_or_else(|| truncated("vertex", i))?;
-                    }
-                    0.0
-                }
-            };
-        }
-        soup.positions
-            .push(DVec3::new(values[x], values[y], values[z]));
-        if let (Some(out), Some([a, b, c])) = (normals.as_mut(), normal) {
-            out.push(DVec3::new(values[a], values[b], values[c]));
-        }
-        if let (Some(out), Some([a, b])) = (uvs.as_mut(), uv) {
-            out.push(DVec2::new(values[a], values[b]));
-        }
-    }
-    soup.normals = normals;
-    soup.uvs = uvs;
-    Ok(())
-}
-
-fn faces(e: &Element, body: &mut Body, soup: &mut Soup) -> Result<(), Fail> {
-    let Some(list) = e
-        .props
-        .iter()
-        .position(|p| p.list.is_some() && (p.name == "vertex_indices" || p.name == "vertex_index"))
-    else {
-        return Err((
-            Some("header".into()),
-            "`face` needs a `vertex_indices` list".into(),
+/// `element NAME COUNT`: a new element; a second `vertex` or `face` is refused.
+fn element(name: &str, count: &str, n: usize, elements: &mut Vec<Element>) -> Result<(), Fail> {
+    let Ok(count) = count.parse() else {
+        return Err(at_line(
+            n,
+            format!("element `{name}` has no count (got `{count}`)"),
         ));
     };
-    let nv = soup.positions.len() as f64;
-    let mut polygon = Vec::new();
-    for i in 0..e.count {
-        for (k, p) in e.props.iter().enumerate() {
-            let Some(c) = p.list else {
-                body.value(p.ty).ok_or_else(|| truncated("face", i))?;
-                continue;
-            };
-            let len = body.value(c).ok_or_else(|| truncated("face", i))?;
-            if k == list && (len.is_nan() || len < 3.0) {
-                return Err((
-                    Some(format!("face {i}")),
-                    format!("a face needs at least 3 vertices (got {len})"),
-                ));
-            }
-            polygon.clear();
-            for _ in 0..len as u64 {
-                let v = body.value(p.ty).ok_or_else(|| truncated("face", i))?;
-                if k == list {
-                    if !(v >= 0.0 && v < nv && v.fract() == 0.0) {
-                        return Err((
-                            Some(format!("face {i}")),
-                            format!("vertex index {v} is out of range ({nv} vertices)"),
-                        ));
-                    }
-                    polygon.push(v as u32);
-                }
-            }
-            if k == list {
-                fan(&polygon, &mut soup.triangles);
-            }
-        }
+    let twice = elements.iter().find(|e| e.name == name);
+    if let (Some(e), "vertex" | "face") = (twice, name) {
+        return Err(at_line(
+            n,
+            format!(
+                "a second `{name}` element (the first is on header line {}); a PLY file has one",
+                e.line
+            ),
+        ));
     }
+    budget::grow(elements, 1, || "the PLY header".into())?;
+    elements.push(Element {
+        name: name.to_string(),
+        count,
+        props: Vec::new(),
+        line: n,
+    });
     Ok(())
 }
 
-fn skip(e: &Element, body: &mut Body) -> Result<(), Fail> {
-    for i in 0..e.count {
-        for p in &e.props {
-            let len = match p.list {
-                Some(c) => body.value(c).ok_or_else(|| truncated(&e.name, i))? as u64,
-                None => 1,
+/// `TYPE NAME` or `list COUNT_TYPE TYPE NAME`, added to the element declared last.
+fn property(words: &[&str], n: usize, element: Option<&mut Element>) -> Result<(), Fail> {
+    let (list, ty, name) = match words {
+        ["list", c, t, name] => {
+            let (Some(c), Some(t)) = (Scalar::parse(c), Scalar::parse(t)) else {
+                return Err(at_line(n, format!("property `{name}` has an unknown type")));
             };
-            for _ in 0..len {
-                body.value(p.ty).ok_or_else(|| truncated(&e.name, i))?;
-            }
+            (Some(c), t, name)
         }
-    }
+        [t, name] => {
+            let Some(t) = Scalar::parse(t) else {
+                return Err(at_line(
+                    n,
+                    format!("property `{name}` has unknown type `{t}`"),
+                ));
+            };
+            (None, t, name)
+        }
+        _ => {
+            return Err(at_line(
+                n,
+                "a property is `TYPE NAME` or `list COUNT_TYPE TYPE NAME`",
+            ));
+        }
+    };
+    let Some(e) = element else {
+        return Err(at_line(n, "a property before any element"));
+    };
+    budget::grow(&mut e.props, 1, || "the PLY header".into())?;
+    e.props.push(Property {
+        name: name.to_string(),
+        list,
+        ty,
+    });
     Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::{DVec2, DVec3};
+
+    fn read_bytes(b: &[u8]) -> Result<Soup, Fail> {
+        read(&mut Input::new(b, b.len() as u64))
+    }
 
     fn binary(big: bool) -> Vec<u8> {
         let head = format!(
@@ -378,29 +332,101 @@ mod tests {
     #[test]
     fn reads_both_endians_alike() {
         for big in [false, true] {
-            let s = read(&binary(big)).unwrap();
+            let s = read_bytes(&binary(big)).unwrap();
             assert_eq!(s.triangles, vec![[0, 1, 2], [0, 2, 3]]);
             assert_eq!(s.positions[2], DVec3::new(1.0, 1.0, 0.0));
             assert_eq!(s.uvs.as_ref().unwrap()[3], DVec2::new(0.0, 1.0));
         }
     }
 
+    const HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nproperty double nx\nproperty double ny\nproperty double nz\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n";
+
     #[test]
-    fn reads_ascii_and_names_bad_faces() {
-        let head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nproperty double nx\nproperty double ny\nproperty double nz\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n";
-        let ok = format!("{head}0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n");
-        let s = read(ok.as_bytes()).unwrap();
+    fn reads_ascii_and_names_bad_rows() {
+        let ok = format!("{HEAD}0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n");
+        let s = read_bytes(ok.as_bytes()).unwrap();
         assert_eq!(s.normals.unwrap()[1], DVec3::Z);
-        let bad = format!("{head}0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 7\n");
-        let e = read(bad.as_bytes()).err().unwrap();
-        assert_eq!(e.0.as_deref(), Some("face 0"));
-        let short = format!("{head}0 0 0 0 0 1\n1 0 0\n");
+        let place = |text: String| read_bytes(text.as_bytes()).err().unwrap().where_.unwrap();
         assert_eq!(
-            read(short.as_bytes()).err().unwrap().0.as_deref(),
-            Some("vertex 1")
+            place(format!(
+                "{HEAD}0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 7\n"
+            )),
+            "face 0"
         );
+        assert_eq!(place(format!("{HEAD}0 0 0 0 0 1\n1 0 0\n")), "vertex 1");
+        // A row with a value too many is that row's fault, not the next one's.
+        assert_eq!(
+            place(format!(
+                "{HEAD}0 0 0 0 0 1 9\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n"
+            )),
+            "vertex 0"
+        );
+        // A list length of 3.5 is not read as 3.
+        let e = read_bytes(
+            format!("{HEAD}0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3.5 0 1 2\n").as_bytes(),
+        )
+        .err()
+        .unwrap();
+        assert!(e.message.contains("whole number"), "{}", e.message);
         let mut b = binary(false);
         b.truncate(b.len() - 3);
-        assert_eq!(read(&b).err().unwrap().0.as_deref(), Some("face 0"));
+        assert_eq!(
+            read_bytes(&b).err().unwrap().where_.as_deref(),
+            Some("face 0")
+        );
+    }
+
+    #[test]
+    fn the_header_is_read_by_its_grammar() {
+        let body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        let head = |extra: &str, end: &str| {
+            format!(
+                "ply\nformat ascii 1.0\n{extra}element vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n{end}\n{body}"
+            )
+        };
+        for text in [
+            head("comment see end_header below\n", "end_header"),
+            head("", "end_header   "),
+            head("Created by Blender3D 247 - www.blender.org\n", "end_header"),
+            head(&"comment a long header\n".repeat(5000), "end_header"),
+        ] {
+            let s = read_bytes(text.as_bytes()).unwrap_or_else(|e| panic!("{}", e.message));
+            assert_eq!(s.triangles, vec![[0, 1, 2]]);
+        }
+        let text = head("element edge 0\nproperty int end_header\n", "end_header");
+        assert_eq!(
+            read_bytes(text.as_bytes()).unwrap().triangles,
+            vec![[0, 1, 2]]
+        );
+        // Faces before vertices, as the format allows.
+        let text = "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n3 0 1 2\n0 0 0\n1 0 0\n0 1 0\n";
+        assert_eq!(
+            read_bytes(text.as_bytes()).unwrap().triangles,
+            vec![[0, 1, 2]]
+        );
+        let text = text.replace("3 0 1 2", "3 0 1 3");
+        assert_eq!(
+            read_bytes(text.as_bytes()).err().unwrap().where_.as_deref(),
+            Some("face 0")
+        );
+    }
+
+    #[test]
+    fn two_vertex_elements_are_refused() {
+        let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n0 0 0 0 0 1\n";
+        let e = read_bytes(text.as_bytes()).err().unwrap();
+        assert_eq!(e.where_.as_deref(), Some("header line 7"), "{}", e.message);
+    }
+
+    #[test]
+    fn a_header_that_declares_more_than_the_file_holds_is_refused_before_reading() {
+        let text = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+        let e = read_bytes(text.as_bytes()).err().unwrap();
+        assert_eq!(e.where_.as_deref(), Some("vertex 0"), "{}", e.message);
+        assert!(
+            e.message.starts_with("the file ends early"),
+            "{}",
+            e.message
+        );
     }
 }

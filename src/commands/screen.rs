@@ -1,0 +1,111 @@
+//! What keeps `check` on one screen for any scene: every list it prints (mesh files, their
+//! placements, textures, area lights' notes, warnings) shows its first few items and counts
+//! the rest, saying that `rayreel check --full` lists them all; lists of numbers are grouped
+//! (`1000 sphere (16 samples)`). Text quoted from model files is cut short where it is read
+//! (`sequence::mesh::quoted`).
+
+/// Items a list shows before it counts the rest.
+pub(crate) const SHOWN: usize = 4;
+
+/// How much `check` prints: a screen, or everything (`--full`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Screen {
+    pub(crate) full: bool,
+}
+
+impl Screen {
+    /// How many of `total` items a list shows: all of them, or `SHOWN − 1` and a line that
+    /// counts the rest.
+    pub(crate) fn keep(self, total: usize) -> usize {
+        match self.full || total <= SHOWN {
+            true => total,
+            false => SHOWN - 1,
+        }
+    }
+
+    /// The first `keep(total)` of `items` as lines, then, when some of the `total` were left
+    /// out, `indent… and N more NOUN (rayreel check --full lists them)`. `items` may hold
+    /// only those shown, so that the others are never made.
+    pub(crate) fn lines(self, items: &[String], total: usize, indent: &str, noun: &str) -> String {
+        let keep = self.keep(total).min(items.len());
+        let mut out = String::new();
+        for item in &items[..keep] {
+            out.push_str(item);
+            if !item.ends_with('\n') {
+                out.push('\n');
+            }
+        }
+        if keep < total {
+            out.push_str(&format!(
+                "{indent}… and {} more {noun} (`rayreel check --full` lists them)\n",
+                total - keep
+            ));
+        }
+        out
+    }
+}
+
+/// Counts of equal values, in order of first appearance: `[16, 16, 64]` → `[(16, 2), (64, 1)]`.
+pub(crate) fn grouped<T: PartialEq + Copy>(values: impl IntoIterator<Item = T>) -> Vec<(T, usize)> {
+    let mut groups: Vec<(T, usize)> = Vec::new();
+    for v in values {
+        match groups.iter_mut().find(|(g, _)| *g == v) {
+            Some((_, n)) => *n += 1,
+            None => groups.push((v, 1)),
+        }
+    }
+    groups
+}
+
+/// Indices as runs: `0-999`, `1, 3 and 7-9`; past `SHOWN` runs, the count of the others.
+pub(crate) fn runs(indices: &[usize]) -> String {
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for &i in indices {
+        match runs.last_mut() {
+            Some((_, last)) if *last + 1 == i => *last = i,
+            _ => runs.push((i, i)),
+        }
+    }
+    let text = |&(a, b): &(usize, usize)| match a == b {
+        true => a.to_string(),
+        false => format!("{a}-{b}"),
+    };
+    let shown: Vec<String> = runs.iter().take(SHOWN).map(text).collect();
+    match runs.len() > SHOWN {
+        true => {
+            let others: usize = runs[SHOWN..].iter().map(|(a, b)| b - a + 1).sum();
+            format!("{} and {others} others", shown.join(", "))
+        }
+        false => match shown.as_slice() {
+            [rest @ .., last] if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+            _ => shown.join(""),
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_lists_are_cut_and_counted() {
+        let items: Vec<String> = (0..10).map(|i| format!("  item {i}")).collect();
+        let short = Screen { full: false }.lines(&items, 10, "  ", "items");
+        assert_eq!(short.lines().count(), SHOWN);
+        assert!(short.ends_with("… and 7 more items (`rayreel check --full` lists them)\n"));
+        let full = Screen { full: true };
+        assert_eq!(full.lines(&items, 10, "  ", "items").lines().count(), 10);
+        let four = Screen { full: false }.lines(&items[..4], 4, "  ", "items");
+        assert_eq!(four.lines().count(), 4);
+        let made = Screen { full: false }.lines(&items[..3], 10, "  ", "items");
+        assert_eq!(made, short);
+    }
+
+    #[test]
+    fn indices_read_as_runs() {
+        assert_eq!(runs(&(0..1000).collect::<Vec<_>>()), "0-999");
+        assert_eq!(runs(&[1, 3, 7, 8, 9]), "1, 3 and 7-9");
+        assert_eq!(runs(&[0, 2, 4, 6, 8, 10, 11]), "0, 2, 4, 6 and 3 others");
+        assert_eq!(grouped([16, 16, 64, 16]), vec![(16, 3), (64, 1)]);
+    }
+}
