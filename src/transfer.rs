@@ -131,7 +131,8 @@ impl Curve {
     #[inline]
     pub(crate) unsafe fn levels_single_avx2(&self, c: &[f32; 8]) -> [u32; 8] {
         use std::arch::x86_64::*;
-        let c = _mm256_loadu_ps(c.as_ptr());
+        // SAFETY: c is 8 floats.
+        let c = unsafe { _mm256_loadu_ps(c.as_ptr()) };
         // max_ps returns its second operand for NaN (and for −0), as `bucket`'s max(c, 0) does.
         let x = _mm256_min_ps(_mm256_max_ps(c, _mm256_setzero_ps()), _mm256_set1_ps(1.0));
         let bits = _mm256_srl_epi32(_mm256_castps_si256(x), _mm_cvtsi32_si128(self.shift as i32));
@@ -144,6 +145,7 @@ impl Curve {
         // All ones (−1) where x ≥ next: subtracting it adds one.
         let up = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GE_OQ>(x, next));
         let mut out = [0u32; 8];
+        // SAFETY: out is 8 u32.
         unsafe { _mm256_storeu_si256(out.as_mut_ptr().cast(), _mm256_sub_epi32(start, up)) };
         out
     }

@@ -106,8 +106,14 @@ impl Pixels {
         Pixels { rows, cols, valid }
     }
 
-    fn lanes(&self) -> impl Iterator<Item = usize> + '_ {
-        (0..MAX_LANES).filter(|k| self.valid >> k & 1 == 1)
+    /// The lanes holding a pixel, in order: one step per set bit of `valid`.
+    fn lanes(&self) -> impl Iterator<Item = usize> + use<> {
+        let mut rest = self.valid;
+        std::iter::from_fn(move || {
+            let k = rest.trailing_zeros() as usize;
+            rest &= rest.wrapping_sub(1);
+            (k < 32).then_some(k)
+        })
     }
 }
 
