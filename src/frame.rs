@@ -114,6 +114,11 @@ fn encode_slice<T: Level>(src: &[f32], dst: &mut [T], max: f32, encoding: Encodi
 /// The sRGB levels of a slice: table lookups, about 2 ns a value (the compiler makes no
 /// vector gathers of them), 13 ms for a 1080p frame against 2 ms for linear values.
 fn srgb_each<T: Level>(src: &[f32], dst: &mut [T], curve: &Curve) {
+    #[cfg(target_arch = "x86_64")]
+    if curve.single() && is_x86_feature_detected!("avx2") {
+        // SAFETY: the feature was just detected, and the curve is single.
+        return unsafe { srgb_single_avx2(src, dst, curve) };
+    }
     if curve.single() {
         for (d, &c) in dst.iter_mut().zip(src) {
             *d = T::from_level(curve.level_single(c));
@@ -122,6 +127,24 @@ fn srgb_each<T: Level>(src: &[f32], dst: &mut [T], curve: &Curve) {
     }
     for (d, &c) in dst.iter_mut().zip(src) {
         *d = T::from_level(curve.level(c));
+    }
+}
+
+/// `srgb_each` of a single curve eight values at a time (gathers); the tail one by one.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn srgb_single_avx2<T: Level>(src: &[f32], dst: &mut [T], curve: &Curve) {
+    let mut d = dst.chunks_exact_mut(8);
+    let mut s = src.chunks_exact(8);
+    for (d, s) in (&mut d).zip(&mut s) {
+        // SAFETY: AVX2 is enabled here, and the caller checked the curve.
+        let levels = unsafe { curve.levels_single_avx2(s.try_into().unwrap()) };
+        for (d, l) in d.iter_mut().zip(levels) {
+            *d = T::from_level(l);
+        }
+    }
+    for (d, &c) in d.into_remainder().iter_mut().zip(s.remainder()) {
+        *d = T::from_level(curve.level_single(c));
     }
 }
 
@@ -307,5 +330,13 @@ mod tests {
             assert_eq!(u32::from(q8[i]), reference(c0, 255.0), "{c:e}");
             assert_eq!(u32::from(q16[i]), reference(c0, 65535.0), "{c:e}");
         }
+        // The sRGB levels of the same values through the slice loop (gathers where the CPU
+        // has AVX2, and a tail) equal the lookup one value at a time; −0 is 0.
+        let mut s8 = vec![0u8; values.len()];
+        srgb_each(&values, &mut s8, Curve::of(255));
+        for (i, &c) in values.iter().enumerate() {
+            assert_eq!(u32::from(s8[i]), Curve::of(255).level(c), "{c:e}");
+        }
+        assert_eq!(Curve::of(255).level(-0.0), 0);
     }
 }

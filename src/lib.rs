@@ -26,6 +26,7 @@ mod claim;
 pub mod cli;
 pub mod commands;
 pub mod console;
+mod denoise;
 pub mod frame;
 mod frameset;
 #[doc(hidden)]

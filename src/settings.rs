@@ -32,6 +32,9 @@ pub struct Settings {
     pub precision: Precision,
     /// Compositing passes written beside the colour (`render.aov`, `--aov`); none by default.
     pub aov: Aovs,
+    /// Film frames go through the film filter (`render.denoise`, `--denoise`): true by
+    /// default on film, always false where no frame is film (it would change nothing).
+    pub denoise: bool,
 }
 
 /// The float type the tracer's lanes compute in (`render.precision`, `--precision`).
@@ -71,6 +74,7 @@ impl std::fmt::Debug for Settings {
             .field("encoding", &self.encoding)
             .field("precision", &self.precision)
             .field("aov", &self.aov)
+            .field("denoise", &self.denoise)
             .finish()
     }
 }

@@ -121,6 +121,35 @@ impl Curve {
         (x, b.min(self.start.len() - 1))
     }
 
+    /// `level_single` of eight values at once: two gathers (bucket start, next threshold) and
+    /// a comparison, the same arithmetic as one value at a time.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2, and `single` must hold.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) unsafe fn levels_single_avx2(&self, c: &[f32; 8]) -> [u32; 8] {
+        use std::arch::x86_64::*;
+        // SAFETY: c is 8 floats.
+        let c = unsafe { _mm256_loadu_ps(c.as_ptr()) };
+        // max_ps returns its second operand for NaN (and for −0), as `bucket`'s max(c, 0) does.
+        let x = _mm256_min_ps(_mm256_max_ps(c, _mm256_setzero_ps()), _mm256_set1_ps(1.0));
+        let bits = _mm256_srl_epi32(_mm256_castps_si256(x), _mm_cvtsi32_si128(self.shift as i32));
+        let low = _mm256_set1_epi32(self.low as i32);
+        let last = _mm256_set1_epi32(self.start.len() as i32 - 1);
+        let b = _mm256_min_epu32(_mm256_sub_epi32(_mm256_max_epu32(bits, low), low), last);
+        // SAFETY: every lane of b is at most start.len() − 1, and next has start's length.
+        let start = unsafe { _mm256_i32gather_epi32::<4>(self.start.as_ptr().cast(), b) };
+        let next = unsafe { _mm256_i32gather_ps::<4>(self.next.as_ptr(), b) };
+        // All ones (−1) where x ≥ next: subtracting it adds one.
+        let up = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GE_OQ>(x, next));
+        let mut out = [0u32; 8];
+        // SAFETY: out is 8 u32.
+        unsafe { _mm256_storeu_si256(out.as_mut_ptr().cast(), _mm256_sub_epi32(start, up)) };
+        out
+    }
+
     /// Whether one comparison decides every level (see `single`).
     pub(crate) fn single(&self) -> bool {
         self.single

@@ -566,3 +566,58 @@ fn a_film_frame_is_what_the_spec_says_bit_for_bit() {
         );
     }
 }
+
+/// The film filter: on by default on film, where it brings a frame closer to a converged one;
+/// `--denoise off` and `render.denoise: false` both keep the rounds' means (the same bytes);
+/// a sequence without film frames is neither changed nor re-fingerprinted by `--denoise on`.
+#[test]
+fn the_film_filter_is_on_for_film_and_can_be_turned_off() {
+    let film = panning("shutter: 180,");
+    let args = |more: &[&'static str]| [&["--frames", "5"], more].concat();
+    let on = pixels(&render_pngs("denoise-on", &film, &args(&[])));
+    let off = pixels(&render_pngs(
+        "denoise-off",
+        &film,
+        &args(&["--denoise", "off"]),
+    ));
+    let file_off = film.replace("render: {", "render: { denoise: false,");
+    let off_in_file = pixels(&render_pngs("denoise-off-file", &file_off, &args(&[])));
+    assert_eq!(off, off_in_file);
+    let truth = pixels(&render_pngs(
+        "denoise-truth",
+        &film,
+        &args(&["--samples", "512"]),
+    ));
+    let rmse = |a: &[u8]| {
+        let sum: f64 = (a.iter().zip(&truth[0]))
+            .map(|(x, y)| (f64::from(*x) - f64::from(*y)).powi(2))
+            .sum();
+        (sum / a.len() as f64).sqrt()
+    };
+    assert!(on != off, "the filter changed nothing");
+    assert!(
+        rmse(&on[0]) < rmse(&off[0]),
+        "{} >= {}",
+        rmse(&on[0]),
+        rmse(&off[0])
+    );
+    // A moving camera without a shutter is no film: the filter never runs, and asking for it
+    // changes neither the bytes nor the fingerprint.
+    let pinhole = panning("");
+    let tmp = scratch("denoise-pinhole");
+    std::fs::write(tmp.join("seq.yaml"), &pinhole).unwrap();
+    let run = |more: &[&str]| {
+        let out = run_in(
+            &tmp,
+            &[&["render", "seq.yaml", "-o", "out/f_#.png"], more].concat(),
+        );
+        assert!(out.status.success(), "{}", stderr(&out));
+        String::from_utf8_lossy(&out.stdout).into_owned() + &stderr(&out)
+    };
+    run(&["--frames", "5", "-q"]);
+    let plain = pixels(&tmp.join("out"));
+    let dry = run(&["--frames", "5", "--denoise", "on", "--dry-run"]);
+    assert!(dry.contains("1 up to date"), "{dry}");
+    run(&["--frames", "5", "--denoise", "on", "-q", "--force"]);
+    assert_eq!(plain, pixels(&tmp.join("out")));
+}

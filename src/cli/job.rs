@@ -171,6 +171,9 @@ fn apply(seq: &mut Sequence, o: &JobArgs) -> Result<(), JobError> {
     if let Some(p) = o.precision {
         seq.settings.precision = p;
     }
+    if let Some(d) = o.denoise {
+        seq.settings.denoise = sequence::denoise(Some(d == super::Switch::On), seq.film());
+    }
     if let Some(e) = o.exposure {
         seq.settings.exposure =
             sequence::exposure(e).map_err(|m| JobError::Usage(format!("--exposure: {m}")))?;

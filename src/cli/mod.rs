@@ -138,9 +138,30 @@ pub struct MeasureArgs {
     /// Encoding of the 8-bit values errors are measured on (default: the sequence's).
     #[arg(long, value_enum)]
     pub(crate) encoding: Option<Encoding>,
-    /// Directory for measure.csv, measure.json and measure.svg (default: frames/NAME/measure).
+    /// Directory for measure.csv, measure.json, measure.svg and reference.png (default:
+    /// frames/NAME/measure).
     #[arg(long, value_name = "DIR")]
     pub(crate) out: Option<PathBuf>,
+    /// Samples per pixel of the reference (default: 1024, or 256 where paths branch).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub(crate) reference_samples: Option<u32>,
+    /// max_depth of the reference (default: 16, or 12 where paths branch); give the file's
+    /// own to measure sampling alone.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10000))]
+    pub(crate) reference_depth: Option<u32>,
+    /// Samples of the render, with other seeds, that the reference is checked against
+    /// (default: half the reference's).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub(crate) check_samples: Option<u32>,
+    /// Keep references in DIR and take them from there when the same frame, scene and
+    /// reference settings come again.
+    #[arg(long, value_name = "DIR")]
+    pub(crate) reference_cache: Option<PathBuf>,
+    /// Only these groups of rows, comma-separated: uniform, adaptive, depth, preset,
+    /// sampler, default, denoise, lights, precision.
+    #[arg(long, value_name = "GROUPS", value_delimiter = ',',
+          value_parser = clap::builder::PossibleValuesParser::new(crate::tools::measure::GROUPS))]
+    pub(crate) only: Option<Vec<String>>,
 }
 
 #[derive(Debug, Args)]
@@ -245,6 +266,17 @@ pub struct JobArgs {
     /// to render.aov).
     #[arg(long, value_enum, value_delimiter = ',', value_name = "PASSES")]
     pub(crate) aov: Vec<crate::settings::Aov>,
+    /// The film filter on frames with motion blur or depth of field (replaces
+    /// render.denoise; on by default): off keeps the samples' means as they are.
+    #[arg(long, value_enum, value_name = "on|off")]
+    pub(crate) denoise: Option<Switch>,
+}
+
+/// A setting turned on or off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum Switch {
+    On,
+    Off,
 }
 
 /// `render`'s options; `status` takes them too and ignores those that only shape a run.

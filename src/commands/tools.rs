@@ -5,6 +5,7 @@ use crate::cli::{BenchArgs, MeasureArgs, PreviewArgs};
 use crate::console::{self, printable};
 use crate::output;
 use crate::sequence;
+use crate::tools::measure;
 
 /// Writes DIR/NAME_path.png and DIR/NAME_sheet.png, printing their paths; warnings about the
 /// camera path go to stderr. A path whose camera cannot be built somewhere is still drawn,
@@ -87,18 +88,31 @@ pub(super) fn measure(args: MeasureArgs) -> Result<(), Error> {
         args.frame,
         shown(&args.file)
     );
-    let report =
-        crate::tools::measure::measure(&seq, args.frame, args.runs as usize, &mut |line| {
-            eprintln!("  {line}")
-        })?;
+    let options = measure::Options {
+        reference: measure::reference::Options {
+            samples: args.reference_samples,
+            depth: args.reference_depth,
+            check_samples: args.check_samples,
+            cache: args.reference_cache,
+        },
+        only: args.only,
+    };
+    let report = measure::measure(
+        &seq,
+        args.frame,
+        args.runs as usize,
+        &options,
+        &mut |line| eprintln!("  {line}"),
+    )?;
     out(&report.table())?;
-    for (name, text) in [
-        ("measure.csv", report.csv()),
-        ("measure.json", report.json()),
-        ("measure.svg", report.svg()),
+    for (name, bytes) in [
+        ("measure.csv", report.csv().into_bytes()),
+        ("measure.json", report.json().into_bytes()),
+        ("measure.svg", report.svg().into_bytes()),
+        ("reference.png", report.reference_png()),
     ] {
         let path = dir.join(name);
-        output::atomic::write_atomic(&path, text.as_bytes())
+        output::atomic::write_atomic(&path, &bytes)
             .map_err(|e| Error::Failed(format!("{}: cannot write: {e}", path.display())))?;
         eprintln!("wrote {}", shown(&path));
     }

@@ -454,6 +454,7 @@ impl Canon for Settings {
             encoding,
             precision,
             aov,
+            denoise,
         } = self;
         let fields: [&dyn Canon; 6] = [width, height, max_depth, depth, samples, adaptive];
         fields.iter().for_each(|f| f.canon(h));
@@ -476,6 +477,10 @@ impl Canon for Settings {
         // Optional too: passes add the byte 3 and their bits, a tag nothing else here takes.
         if !aov.is_empty() {
             h.write(&[3, aov.bits()]);
+        }
+        // And the film filter adds the byte 4 (it is only ever on for film).
+        if *denoise {
+            h.write(&[4]);
         }
     }
 }
@@ -554,6 +559,7 @@ mod tests {
             encoding: Encoding::Srgb,
             precision: Precision::F64,
             aov: Default::default(),
+            denoise: false,
         };
         let scene = Scene {
             objects: Vec::new(),
@@ -630,6 +636,17 @@ mod tests {
         bytes.splice(n - 2..n - 2, [3, 0b01001]);
         assert_eq!(
             of_run(&scene, &passes, &png).hex(),
+            Hasher::new().write(&bytes).hex()
+        );
+        // The film filter appends the byte 4 after those.
+        let filtered = Settings {
+            denoise: true,
+            ..passes
+        };
+        let n = bytes.len();
+        bytes.insert(n - 2, 4);
+        assert_eq!(
+            of_run(&scene, &filtered, &png).hex(),
             Hasher::new().write(&bytes).hex()
         );
     }

@@ -18,13 +18,14 @@ use crate::transfer::Encoding;
 pub(crate) const KEY: &str = "rayreel:settings";
 
 /// Fields whose difference changes only how well a frame is sampled, not what it shows.
-const QUALITY: [&str; 6] = [
+const QUALITY: [&str; 7] = [
     "samples",
     "max_samples",
     "threshold",
     "max_depth",
     "sampler",
     "precision",
+    "denoise",
 ];
 
 /// Named materials beyond this many are recorded as one hash (`materials`), so the record of
@@ -82,6 +83,7 @@ fn settings(s: &Settings, format: &FileFormat) -> Vec<(String, String)> {
         ("encoding", encoding(s.encoding, exr).into()),
         ("format", format_name(format).into()),
         ("aov", aovs(s.aov)),
+        ("denoise", yes(s.denoise).into()),
     ];
     fields.map(|(k, v)| (k.to_string(), v)).into()
 }
@@ -363,6 +365,7 @@ fn raises<'a>(pair: &dyn Fn(&str) -> Pair<'a>) -> bool {
         && not_lower("threshold", false)
         && not_lower("max_depth", true)
         && pair("sampler").0 == pair("sampler").1
+        && pair("denoise").0.unwrap_or("no") == pair("denoise").1.unwrap_or("no")
         && (precision.0 == precision.1 || precision.1 == Some(Precision::F64.name()))
 }
 

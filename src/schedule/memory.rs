@@ -6,7 +6,9 @@
 //! Per frame (bytes a pixel): the tracer's planes, 12 for RGB, 4 each for alpha and depth, 4 a
 //! channel of compositing passes, and with adaptive sampling 4 for each pixel's spread or error
 //! estimate and 28 for a pass that extends every pixel (its index, its new mean, coverage and
-//! estimate, the estimate copied out: film's first round does); then, while that frame is encoded,
+//! estimate, the estimate copied out: film's first round does), or, after the rounds, for the
+//! film filter (each pixel's variance, guide and new mean; also without adaptive sampling when
+//! the filter is on); then, while that frame is encoded,
 //! EXR's channel planes (2 a colour sample in half, 4 in float, depth and passes 4), one f32 plane copied out before conversion, and the file's
 //! bytes (at most the channels again: ZIP never doubles them); PNG's or the stream's integer
 //! samples and the file's bytes. What may be used is the budget's figure (`crate::budget`: the
@@ -32,7 +34,7 @@ const SLACK: u64 = 128 << 20;
 pub(crate) fn frame_bytes(settings: &Settings, format: Option<FileFormat>) -> u64 {
     let pixels = u64::from(settings.width) * u64::from(settings.height);
     let (a, d) = (u64::from(settings.alpha), u64::from(settings.depth));
-    let adaptive = u64::from(settings.adaptive.is_some());
+    let adaptive = u64::from(settings.adaptive.is_some() || settings.denoise);
     // Compositing passes: f32 planes, copied once more into the EXR's channels.
     let passes: u64 = settings.aov.iter().map(|p| 4 * p.channels()).sum();
     let render = 12 + 4 * a + 4 * d + 32 * adaptive + passes;

@@ -232,10 +232,22 @@ pub(crate) fn render_with(
     n: u64,
     settings: &Settings,
 ) -> Result<Frame, RunError> {
+    render_seeded(world, seq, n, n, settings)
+}
+
+/// `render_with`, its samples seeded as frame `seed`'s would be (`measure`'s references are
+/// frame n seen with other seeds).
+pub(crate) fn render_seeded(
+    world: &World,
+    seq: &Sequence,
+    n: u64,
+    seed: u64,
+    settings: &Settings,
+) -> Result<Frame, RunError> {
     let view = settings.frame_view(&seq.timeline, n);
     let exposure =
         (view.exposure.as_ref()).map_err(|&source| RunError::Camera { frame: n, source })?;
-    let mut frame = tracer::render(world, exposure, settings, n);
+    let mut frame = tracer::render(world, exposure, settings, seed);
     let never = std::sync::atomic::AtomicBool::new(false);
     if !settings.aov.is_empty() {
         frame.aov = tracer::aov::render(

@@ -32,7 +32,7 @@ pub use settings::{
     FILM_FINAL_THRESHOLD, FILM_SAMPLING_MAX, FILM_THRESHOLD, LENS_SAMPLES, SHUTTER_SAMPLES,
 };
 pub(crate) use settings::{
-    Explicit, MAX_SAMPLES, default_sampling, exposure, output_pattern, preset,
+    Explicit, MAX_SAMPLES, default_sampling, denoise, exposure, output_pattern, preset,
 };
 pub(crate) use textures::decode as decode_texture;
 pub(crate) use timeline::{MAX_FIRST_FRAME, rolls_over};
@@ -417,6 +417,7 @@ fn validate(
     // Glass needs a preset's depth, film its sampling.
     let film = film(&settings, &timeline);
     explicit.settle(&mut settings, raw.render.quality, scene.has_glass(), film);
+    settings.denoise = denoise(raw.render.denoise, film);
     let seq = Sequence {
         name: name.to_string(),
         scene,

@@ -44,6 +44,7 @@ pub struct Render {
     pub shutter_offset: Option<f64>,
     pub precision: Option<crate::settings::Precision>,
     pub aov: Option<Vec<crate::settings::Aov>>,
+    pub denoise: Option<bool>,
 }
 
 /// `render.background`: a colour triple, or a sky (`{ image: … }`, `{ gradient: … }`).

@@ -81,6 +81,8 @@ pub(super) fn render_settings(r: &raw::Render) -> Check<(Settings, Explicit)> {
         encoding: r.encoding.unwrap_or_default(),
         precision: r.precision.unwrap_or_default(),
         aov: Aovs::of(r.aov.as_deref().unwrap_or_default()),
+        // Film is known once the timeline is: `validate` settles it (`denoise`).
+        denoise: false,
     };
     pixels(s.width, s.height).or_else(|m| invalid("render.width", m))?;
     let explicit = explicit(r)?;
@@ -145,6 +147,13 @@ fn adaptive(a: &raw::Adaptive) -> Check<Adaptive> {
     })
 }
 
+/// Whether film frames are filtered: the file's `render.denoise` (true unless it says
+/// false), or the command line's; never where no frame is film, so pinhole sequences keep
+/// their settings and fingerprints.
+pub(crate) fn denoise(asked: Option<bool>, film: Film) -> bool {
+    asked.unwrap_or(true) && film != Film::Pinhole
+}
+
 /// Largest |render.exposure|, in stops: 2^64 times the brightest colour still fits an f32.
 pub(crate) const MAX_EXPOSURE: f64 = 64.0;
 
@@ -186,7 +195,7 @@ pub const DEFAULT_SAMPLING_MAX: u32 = 8;
 /// shutter on a moving camera (`SHUTTER_SAMPLES`) or a lens (`LENS_SAMPLES`) sets no sampling.
 pub const SHUTTER_SAMPLES: u32 = 2;
 pub const LENS_SAMPLES: u32 = 4;
-pub const FILM_THRESHOLD: f64 = 0.025;
+pub const FILM_THRESHOLD: f64 = 0.035;
 pub const FILM_SAMPLING_MAX: u32 = 64;
 /// `final`'s threshold and most samples on film.
 pub const FILM_FINAL_THRESHOLD: f64 = 0.01;

@@ -257,17 +257,14 @@ fn render_frame(
     let (w, h) = (settings.width as usize, settings.height as usize);
     let mut rgb = crate::frame::buffer(3 * w * h);
     let mut alpha = settings.alpha.then(|| crate::frame::buffer(w * h));
-    let mut spread = vec![
-        0f32;
-        if settings.adaptive.is_some() {
-            w * h
-        } else {
-            0
-        }
-    ];
     let camera = &exposure.camera;
     let from_origin = world.geometry.from_origin(camera.origin);
     let sampled = exposure.sampled();
+    // Film frames record each pixel's error estimate for the rounds and the film filter.
+    let rounds =
+        sampled && settings.samples > 1 && (settings.adaptive.is_some() || settings.denoise);
+    let recorded = settings.adaptive.is_some() || rounds;
+    let mut spread = vec![0f32; if recorded { w * h } else { 0 }];
     let first = Pass {
         world,
         camera,
@@ -275,7 +272,7 @@ fn render_frame(
         settings,
         frame,
         samples: Samples::All(settings.samples),
-        rounds: sampled && settings.adaptive.is_some() && settings.samples > 1,
+        rounds,
         from_origin: &from_origin,
         instants,
         stop,
@@ -300,6 +297,10 @@ fn render_frame(
             .filter(|&i| marked[i as usize])
             .collect();
         stats = stats + extend(kernel, &more, &marked, &mut planes).0;
+    }
+    // The film filter, before the exposure scales what the error estimates describe.
+    if first.rounds && settings.denoise {
+        crate::denoise::filter(&mut rgb, &spread, alpha.as_deref(), w);
     }
     if settings.exposure != 0.0 {
         expose(&mut rgb, settings.exposure);

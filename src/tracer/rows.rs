@@ -109,8 +109,14 @@ impl Pixels {
         Pixels { rows, cols, valid }
     }
 
-    fn lanes(&self) -> impl Iterator<Item = usize> + '_ {
-        (0..MAX_LANES).filter(|k| self.valid >> k & 1 == 1)
+    /// The lanes holding a pixel, in order: one step per set bit of `valid`.
+    fn lanes(&self) -> impl Iterator<Item = usize> + use<> {
+        let mut rest = self.valid;
+        std::iter::from_fn(move || {
+            let k = rest.trailing_zeros() as usize;
+            rest &= rest.wrapping_sub(1);
+            (k < 32).then_some(k)
+        })
     }
 }
 
@@ -227,8 +233,10 @@ fn packet<V: Lanes>(
     let centre = Seed::new(Pattern::Centre, 0, 0);
     let seeds = match pattern {
         // The centre needs no seed, Sobol' points their own.
-        Pattern::Centre | Pattern::Sobol => [centre; MAX_LANES],
-        _ => per_lane(V::N, centre, |k| Seed::new(pattern, pass.frame, pixel(k))),
+        Pattern::Centre | Pattern::Sobol => None,
+        _ => Some(per_lane(V::N, centre, |k| {
+            Seed::new(pattern, pass.frame, pixel(k))
+        })),
     };
     let lead = px.valid.trailing_zeros() as usize;
     let sobol = (pattern == Pattern::Sobol).then(|| {
@@ -273,38 +281,40 @@ fn packet<V: Lanes>(
             Dims::new(pattern, pass.frame, pixel(k))
         })),
     };
+    // Per lane, with the shutter open: u, v, then the lens's a, b, then the time (a pinhole
+    // frame neither needs nor zeroes them).
+    let mut film = pass.exposure.map(|_| [[0.0; MAX_LANES]; 5]);
     for k in (first..end).take_while(|_| !pass.stopped()) {
-        // Per lane: u, v, then the lens's a, b, then the time.
-        let mut x = [[0.0; MAX_LANES]; 5];
-        let (u, v) = match &sobol {
-            Some(sobol) => {
-                sobol.at(k, &mut x);
+        let (u, v) = match (&sobol, &seeds, &mut film) {
+            (Some(sobol), _, Some(x)) => {
+                sobol.at(k, x);
                 (V::load(&x[0]), V::load(&x[1]))
             }
-            None => offsets::<V>(pattern, &seeds, k),
+            (None, Some(seeds), _) => offsets::<V>(pattern, seeds, k),
+            // The centre (Sobol' points come only with the shutter open).
+            _ => (V::splat(0.5), V::splat(0.5)),
         };
-        if let Some(dims) = &dims {
+        if let (Some(dims), Some(x)) = (&dims, &mut film) {
             for lane in 0..V::N {
                 [x[4][lane], x[2][lane], x[3][lane]] = dims[lane].at(pattern, k);
             }
         }
-        let (a, b, times) = (&x[2], &x[3], &x[4]);
         let lights = light_seeds.as_ref().map(|seeds| LightSeeds { seeds, k });
         // While things move under the open shutter, each lane's instant (else None).
         let mut js = None;
-        let eye = match pass.exposure {
-            Some(exposure) => Eye {
+        let eye = match (pass.exposure, &film) {
+            (Some(exposure), Some(x)) => Eye {
                 rays: {
                     if !pass.instants.is_empty() {
-                        js = Some(std::array::from_fn(|k| instant(times[k]) as u8));
+                        js = Some(std::array::from_fn(|k| instant(x[4][k]) as u8));
                     }
                     sampled_rays(
                         pass,
                         exposure,
                         (row, col),
                         (u, v),
-                        times,
-                        (V::load(a), V::load(b)),
+                        &x[4],
+                        (V::load(&x[2]), V::load(&x[3])),
                     )
                 },
                 active: V::M::from_bits(px.valid),
@@ -468,12 +478,10 @@ fn finish<V: Lanes>(
     }
 }
 
-/// Sub-pixel offsets of sample `k` for each lane's pixel (see `sample`).
+/// Sub-pixel offsets of sample `k` for each lane's pixel (see `sample`); the centre's are
+/// (0.5, 0.5) and need no seed.
 #[inline(always)]
 fn offsets<V: Lanes>(pattern: Pattern, seeds: &[Seed; MAX_LANES], k: u32) -> (V, V) {
-    if pattern == Pattern::Centre {
-        return (V::splat(0.5), V::splat(0.5));
-    }
     let (mut u, mut v) = ([0.0; MAX_LANES], [0.0; MAX_LANES]);
     for i in 0..V::N {
         (u[i], v[i]) = seeds[i].offset(pattern, k);

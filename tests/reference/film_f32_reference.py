@@ -160,7 +160,7 @@ def estimate(a, b, e32):
     return R(max(max(g[0], g[1]), g[2]) * 0.5)
 
 def render(n, rounds, e32=True):
-    thr = R(0.025); h = n // 2; mean = [None]*(W*H); est = [None]*(W*H)
+    thr = R(fr.THRESHOLD); h = n // 2; mean = [None]*(W*H); est = [None]*(W*H)
     for i in range(H):
         for j in range(W):
             px = i*W+j; seeds = fr.pixel_seeds(px)
@@ -187,7 +187,7 @@ def render(n, rounds, e32=True):
             est[px] = estimate(m, tuple(fd(x, float(total-have)) for x in B), e32)
         have, last = total, go
     print('rounds', log, file=sys.stderr)
-    return mean
+    return fr.film_filter(mean, est)
 
 if __name__ == '__main__':
     out = sys.argv[1]; a = sys.argv[2:]

@@ -10,7 +10,8 @@ values). All arithmetic is IEEE-754 f64 on scalar Python floats, in the spec's o
 order; each pixel's mean is rounded to f32 as the Pixel and Rounds rules say.
 
 The scene is film_40x24.yaml beside this script, hard-coded here (frame 0; no sampling set,
-so film's default with a lens: 4 samples, then rounds up to 64 at threshold 0.025).
+so film's default with a lens: 4 samples, then rounds up to 64 at threshold 0.035, then the
+film filter).
 
 rayreel's values: `rayreel render SCENE --exr-precision float -o frame.exr` (EXR float
 channels hold the f32 pixel values); `--samples 4` / `--samples 16` give the uniform renders.
@@ -50,7 +51,7 @@ MATERIALS = {
 SPHERES_IN = [((-0.2, 0.0, -1.0), 0.7, 'red'), ((-0.3, 0.0, 0.0), 0.15, 'green')]
 PLANES_IN = [((0.0, -0.7, 0.0), (0.0, 1.0, 0.0), 'floor')]
 LIGHTS = [dict(pos=(5.0, 5.0, 5.0), ia=(1.0, 1.0, 1.0), id=(1.0, 1.0, 1.0), is_=(1.0, 1.0, 1.0))]
-DEFAULT_SAMPLES, MAX_SAMPLES, THRESHOLD = 4, 64, 0.025
+DEFAULT_SAMPLES, MAX_SAMPLES, THRESHOLD = 4, 64, 0.035
 
 
 # ---------------------------------------------------------------- vectors
@@ -457,7 +458,50 @@ def render_rounds(n, max_samples, threshold, first_mean='sequential', stats=None
         last = go
     if stats is not None:
         stats['rounds'] = rounds
-    return mean
+    return film_filter(mean, est)
+
+
+# ---------------------------------------------------------------- film filter (f32)
+def film_filter(mean, est):
+    """docs/spec/tracer.md, Film filter: every operation in f32 (no alpha here: all whole)."""
+    F = f32(1.6e-5)
+
+    def block(p):
+        i, j = divmod(p, W)
+        return [ii * W + jj for ii in range(max(i - 1, 0), min(i + 2, H))
+                for jj in range(max(j - 1, 0), min(j + 2, W))]
+
+    var = []
+    for p in range(W * H):
+        s, n = 0.0, 0.0
+        for q in block(p):
+            s = f32(s + f32(est[q] * est[q]))
+            n = f32(n + 1.0)
+        var.append(f32(s / n))
+    guide = [tuple(f32(math.sqrt(max_(c, 0.0))) for c in m) for m in mean]
+    tap = (0.5, 0.25)
+    out = []
+    for p in range(W * H):
+        vp = var[p]
+        if not (vp > F):
+            out.append(mean[p])
+            continue
+        acc, total = [0.0, 0.0, 0.0], 0.0
+        for q in block(p):
+            d2 = 0.0
+            for c in range(3):
+                d = f32(guide[p][c] - guide[q][c])
+                dd = f32(d * d)
+                d2 = dd if dd > d2 else d2
+            a = f32(9.0 * f32(vp + var[q]))
+            r = f32(a / f32(a + d2))
+            t = f32(tap[abs(q // W - p // W)] * tap[abs(q % W - p % W)])
+            weight = f32(t * f32(r * r))
+            for c in range(3):
+                acc[c] = f32(acc[c] + f32(weight * mean[q][c]))
+            total = f32(total + weight)
+        out.append(tuple(f32(acc[c] / total) for c in range(3)))
+    return out
 
 
 def main():

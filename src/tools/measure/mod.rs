@@ -8,12 +8,13 @@
 use crate::frame::Frame;
 use crate::scene::Light;
 use crate::schedule::{RunError, render_with};
-use crate::sequence::{Film, Quality, Sequence, default_sampling, preset};
+use crate::sequence::{Film, Quality, Sequence, default_sampling};
 use crate::tracer::{Adaptive, Precision, Sampler, Settings, World};
 use crate::transfer::Encoding;
 use std::time::Instant;
 
 mod plot;
+pub mod reference;
 mod report;
 
 /// Samples per pixel of the reference (a jittered 32×32 grid) and its max_depth: with the
@@ -41,13 +42,15 @@ pub struct Distance {
     pub off: f64,
     /// Share of pixels with some channel off by more than two levels.
     pub off2: f64,
+    /// Share of pixels with some channel off by more than eight levels: grain a viewer sees.
+    pub off8: f64,
 }
 
 pub fn compare(a: &[u8], b: &[u8]) -> Distance {
     assert_eq!(a.len(), b.len(), "images of different sizes");
     let mut sum = 0.0;
     let mut max = 0u8;
-    let (mut off, mut off2) = (0usize, 0usize);
+    let (mut off, mut off2, mut off8) = (0usize, 0usize, 0usize);
     for (pa, pb) in a.chunks(3).zip(b.chunks(3)) {
         let mut worst = 0;
         for (x, y) in pa.iter().zip(pb) {
@@ -58,6 +61,7 @@ pub fn compare(a: &[u8], b: &[u8]) -> Distance {
         max = max.max(worst);
         off += usize::from(worst > 1);
         off2 += usize::from(worst > 2);
+        off8 += usize::from(worst > 8);
     }
     let rmse = (sum / a.len() as f64).sqrt();
     let psnr = if rmse == 0.0 {
@@ -72,6 +76,7 @@ pub fn compare(a: &[u8], b: &[u8]) -> Distance {
         max,
         off: off as f64 / pixels,
         off2: off2 as f64 / pixels,
+        off8: off8 as f64 / pixels,
     }
 }
 
@@ -104,24 +109,32 @@ pub fn render(seq: &Sequence, n: u64, settings: &Settings) -> Result<Frame, RunE
 
 /// The reference `measure` compares against, for a scene whose paths are trees or not.
 pub fn reference_settings(base: &Settings, trees: bool) -> Settings {
+    reference_with(base, trees, &reference::Options::default())
+}
+
+/// `reference_settings` with the samples and max_depth `options` give, where they give them.
+fn reference_with(base: &Settings, trees: bool, options: &reference::Options) -> Settings {
     let (samples, max_depth) = match trees {
         false => (REFERENCE_SAMPLES, REFERENCE_DEPTH),
         true => (TREE_REFERENCE_SAMPLES, TREE_REFERENCE_DEPTH),
     };
     Settings {
-        samples,
+        samples: options.samples.unwrap_or(samples),
         adaptive: None,
-        max_depth,
+        max_depth: options.depth.unwrap_or(max_depth),
         sampler: Sampler::Stratified,
         depth: false,
         alpha: false,
         precision: REFERENCE_PRECISION,
+        denoise: false,
         ..*base
     }
 }
 
-/// The ladder of settings measured against the reference.
-pub fn ladder(base: &Settings, film: Film) -> Vec<(&'static str, String, Settings, bool)> {
+/// The ladder of settings measured against the reference. The presets are what `--quality`
+/// gives this file (they keep the sampling values it sets itself).
+pub fn ladder(seq: &Sequence) -> Vec<LadderRow> {
+    let (base, film) = (&seq.settings, seq.film());
     let mut out = Vec::new();
     let with = |samples, adaptive, max_depth| Settings {
         samples,
@@ -161,7 +174,10 @@ pub fn ladder(base: &Settings, film: Film) -> Vec<(&'static str, String, Setting
         (Quality::Final, "final"),
     ] {
         let mut s = with(1, None, base.max_depth);
-        preset(&mut s, q, film);
+        (seq.explicit).preset(&mut s, q, seq.scene.has_glass(), film);
+        if s.adaptive.is_some_and(|a| a.max_samples <= s.samples) {
+            s.adaptive = None;
+        }
         out.push(("preset", name.to_string(), s, q == Quality::Draft));
     }
     // What the sampler and the default buy: independent samples beside the 16 spp row above,
@@ -183,8 +199,28 @@ pub fn ladder(base: &Settings, film: Film) -> Vec<(&'static str, String, Setting
         default_sampling(&mut s, f);
         out.push(("default", label.to_string(), s, false));
     }
+    if film != Film::Pinhole {
+        out.extend(unfiltered(&out));
+    }
     out
 }
+
+/// What the film filter buys: the default and `final` rows again with it off.
+fn unfiltered(rows: &[(&'static str, String, Settings, bool)]) -> Vec<LadderRow> {
+    let wanted = |label: &str| label == "default" || label == "final";
+    (rows.iter().filter(|r| wanted(&r.1)))
+        .map(|(_, label, s, half)| {
+            let s = Settings {
+                denoise: false,
+                ..*s
+            };
+            ("denoise", format!("{label} (denoise off)"), s, *half)
+        })
+        .collect()
+}
+
+/// A rung: its group, label, settings, and whether it renders at half size.
+type LadderRow = (&'static str, String, Settings, bool);
 
 /// The file's own settings in f64 and in f32 (both, whatever the file says), f64 first.
 pub(crate) fn precisions(base: &Settings) -> [(String, Settings); 2] {
@@ -293,8 +329,10 @@ pub(crate) struct Report {
     /// Samples per pixel and max_depth of the reference.
     pub(crate) reference: (u32, u32),
     pub(crate) reference_seconds: f64,
-    /// Error of a reference with half the samples, against the reference.
-    pub(crate) convergence: Distance,
+    /// Samples of the check render, and its error against the reference.
+    pub(crate) convergence: (u32, Distance),
+    /// The reference (written as reference.png).
+    pub(crate) reference_frame: Frame,
     pub(crate) rows: Vec<Row>,
 }
 
@@ -336,29 +374,62 @@ fn light_rows(
     Ok(rows)
 }
 
+/// What to measure besides the frame: the reference, and which groups of rows.
+#[derive(Debug, Clone, Default)]
+pub struct Options {
+    pub reference: reference::Options,
+    /// Only these groups of rows (`GROUPS`); all when None.
+    pub only: Option<Vec<String>>,
+}
+
+/// The groups of rows, in the order they are measured.
+pub const GROUPS: [&str; 9] = [
+    "uniform",
+    "adaptive",
+    "depth",
+    "preset",
+    "sampler",
+    "default",
+    "denoise",
+    "lights",
+    "precision",
+];
+
+impl Options {
+    fn wants(&self, group: &str) -> bool {
+        self.only
+            .as_ref()
+            .is_none_or(|only| only.iter().any(|g| g == group))
+    }
+}
+
 /// Renders the reference and the ladder; `progress` hears each rung as it finishes.
 pub(crate) fn measure(
     seq: &Sequence,
     n: u64,
     runs: usize,
+    options: &Options,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Report, RunError> {
     let world = World::new(seq.scene.clone());
-    let reference = reference_settings(&seq.settings, world.trees());
-    let start = Instant::now();
-    let ref_image = render_with(&world, seq, n, &reference)?.to_rgb8();
-    let reference_seconds = start.elapsed().as_secs_f64();
+    let reference = reference_with(&seq.settings, world.trees(), &options.reference);
+    let cache = options.reference.cache.as_deref();
+    let (truth, reference_seconds) =
+        reference::reference(&world, seq, n, &reference, cache, false)?;
+    let ref_image = truth.to_rgb8();
     progress(&format!(
         "reference: {} spp, max_depth {}, {reference_seconds:.2} s",
         reference.samples, reference.max_depth
     ));
-    let half = Settings {
-        samples: reference.samples / 2,
+    let check = Settings {
+        samples: (options.reference.check_samples).unwrap_or(reference.samples / 2),
         ..reference
     };
-    let convergence = compare(&render_with(&world, seq, n, &half)?.to_rgb8(), &ref_image);
+    let check_image = reference::reference(&world, seq, n, &check, cache, true)?.0;
+    let convergence = compare(&check_image.to_rgb8(), &ref_image);
     let mut rows = Vec::new();
-    for (group, label, settings, half) in ladder(&seq.settings, seq.film()) {
+    let ladder = ladder(seq);
+    for (group, label, settings, half) in ladder.into_iter().filter(|r| options.wants(r.0)) {
         let (image, spp, times) = timed(&world, seq, n, &settings, half, runs)?;
         let error = compare(&image, &ref_image);
         progress(&format!("{label}: rmse {:.3}", error.rmse));
@@ -372,22 +443,25 @@ pub(crate) fn measure(
             versus_f64: None,
         });
     }
-    for row in light_rows(seq, n, runs, &ref_image, progress)? {
-        rows.push(row);
+    if options.wants("lights") {
+        rows.extend(light_rows(seq, n, runs, &ref_image, progress)?);
     }
-    for row in precision_rows(&world, seq, n, runs, &ref_image)? {
-        let e = row.versus_f64.expect("a precision row").error;
-        progress(&format!(
-            "{}: rmse {:.3}, against f64 rmse {:.3}",
-            row.label, row.error.rmse, e.rmse
-        ));
-        rows.push(row);
+    if options.wants("precision") {
+        for row in precision_rows(&world, seq, n, runs, &ref_image)? {
+            let e = row.versus_f64.expect("a precision row").error;
+            progress(&format!(
+                "{}: rmse {:.3}, against f64 rmse {:.3}",
+                row.label, row.error.rmse, e.rmse
+            ));
+            rows.push(row);
+        }
     }
     Ok(Report {
         encoding: seq.settings.encoding,
         reference: (reference.samples, reference.max_depth),
         reference_seconds,
-        convergence,
+        convergence: (check.samples, convergence),
+        reference_frame: truth,
         rows,
     })
 }

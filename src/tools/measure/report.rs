@@ -2,10 +2,25 @@
 //! per setting, the same columns in both).
 
 use super::{F32_TARGET_OFF2, REFERENCE_PRECISION, Report, Row, Versus};
+use crate::output::png::Compression;
 use crate::tracer::Precision;
 use std::fmt::Write as _;
 
 impl Report {
+    /// The reference's time over the row's, or `-` for a reference taken from the cache.
+    fn speedup(&self, r: &Row) -> String {
+        match self.reference_seconds > 0.0 {
+            true => format!("{:.1}x", self.reference_seconds / r.seconds[0]),
+            false => "-".into(),
+        }
+    }
+
+    /// The reference as an 8-bit PNG in the frame's encoding, to see what rows were held to.
+    pub(crate) fn reference_png(&self) -> Vec<u8> {
+        crate::output::png::encode(&self.reference_frame, false, Compression::Fast, &[])
+            .expect("an 8-bit PNG of a frame in memory")
+    }
+
     pub(crate) fn table(&self) -> String {
         let mut s = format!(
             "errors on the 8-bit {} values of each frame (render.encoding)\n",
@@ -16,25 +31,44 @@ impl Report {
         }
         let _ = writeln!(
             s,
-            "{:<24} {:>9} {:>9} {:>9} {:>8} {:>8} {:>7} {:>4} {:>7}",
-            "settings", "spp", "time s", "speed-up", "rmse", "psnr dB", "max", "", ">1/255"
+            "{:<24} {:>9} {:>9} {:>9} {:>8} {:>8} {:>7} {:>4} {:>7} {:>7}",
+            "settings",
+            "spp",
+            "time s",
+            "speed-up",
+            "rmse",
+            "psnr dB",
+            "max",
+            "",
+            ">1/255",
+            ">8/255"
         );
         for r in &self.rows {
             let _ = writeln!(
                 s,
-                "{:<24} {:>9.2} {:>9.4} {:>8.1}x {:>8.3} {:>8.2} {:>7} {:>4} {:>6.2}%",
+                "{:<24} {:>9.2} {:>9.4} {:>9} {:>8.3} {:>8.2} {:>7} {:>4} {:>6.2}% {:>6.2}%",
                 r.label,
                 r.samples_per_pixel,
                 r.seconds[0],
-                self.reference_seconds / r.seconds[0],
+                self.speedup(r),
                 r.error.rmse,
                 r.error.psnr,
                 r.error.max,
                 "",
-                100.0 * r.error.off
+                100.0 * r.error.off,
+                100.0 * r.error.off8
             );
         }
-        s + &self.precision_table()
+        let (samples, check) = self.convergence;
+        let _ = writeln!(
+            s,
+            "reference: {} spp, max_depth {}; {samples} spp of other seeds differ from it by rmse {:.3} ({:.2} dB)",
+            self.reference.0, self.reference.1, check.rmse, check.psnr
+        );
+        match self.rows.iter().any(|r| r.versus_f64.is_some()) {
+            true => s + &self.precision_table(),
+            false => s,
+        }
     }
 
     /// The precision rows against the f64 row, with issue 19's target for f32.
@@ -103,6 +137,7 @@ impl Report {
                     ("max_error", r.error.max.to_string()),
                     ("share_off", format!("{:.6}", r.error.off)),
                     ("share_off_2", format!("{:.6}", r.error.off2)),
+                    ("share_off_8", format!("{:.6}", r.error.off8)),
                 ]
                 .into_iter()
                 .chain(versus_record(r.versus_f64))
@@ -144,12 +179,13 @@ impl Report {
             })
             .collect();
         format!(
-            "{{\n  \"reference\": {{\"samples_per_pixel\": {}, \"max_depth\": {}, \"precision\": \"{}\", \"seconds\": {:.6}, \"half_samples_rmse\": {:.5}}},\n  \"rows\": [\n{}\n  ]\n}}\n",
+            "{{\n  \"reference\": {{\"samples_per_pixel\": {}, \"max_depth\": {}, \"precision\": \"{}\", \"seconds\": {:.6}, \"check_samples_per_pixel\": {}, \"check_rmse\": {:.5}}},\n  \"rows\": [\n{}\n  ]\n}}\n",
             self.reference.0,
             self.reference.1,
             REFERENCE_PRECISION.name(),
             self.reference_seconds,
-            self.convergence.rmse,
+            self.convergence.0,
+            self.convergence.1.rmse,
             rows.join(",\n")
         )
     }
