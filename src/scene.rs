@@ -416,3 +416,39 @@ impl Light {
 pub fn closest_to_origin(point: DVec3, normal: DVec3) -> DVec3 {
     normal * point.dot(normal)
 }
+
+/// Rz · Ry · Rx for angles in degrees, right-handed (counter-clockwise seen from the positive
+/// axis). Whole multiples of 90° use exact 0 and ±1, so axis-aligned models stay aligned.
+pub fn rotation(degrees: DVec3) -> DMat3 {
+    let (sx, cx) = sin_cos(degrees.x);
+    let (sy, cy) = sin_cos(degrees.y);
+    let (sz, cz) = sin_cos(degrees.z);
+    let rx = DMat3::from_cols(
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(0.0, cx, sx),
+        DVec3::new(0.0, -sx, cx),
+    );
+    let ry = DMat3::from_cols(
+        DVec3::new(cy, 0.0, -sy),
+        DVec3::new(0.0, 1.0, 0.0),
+        DVec3::new(sy, 0.0, cy),
+    );
+    let rz = DMat3::from_cols(
+        DVec3::new(cz, sz, 0.0),
+        DVec3::new(-sz, cz, 0.0),
+        DVec3::new(0.0, 0.0, 1.0),
+    );
+    rz * (ry * rx)
+}
+
+/// sin and cos of an angle in degrees: exact at whole multiples of 90°, else libm's of the
+/// angle (reduced to (−360, 360) by `%`) times π/180.
+fn sin_cos(degrees: f64) -> (f64, f64) {
+    let d = degrees % 360.0;
+    if d % 90.0 == 0.0 {
+        let quarter = ((d / 90.0) as i64).rem_euclid(4);
+        return [(0.0, 1.0), (1.0, 0.0), (0.0, -1.0), (-1.0, 0.0)][quarter as usize];
+    }
+    let r = d.to_radians();
+    (libm::sin(r), libm::cos(r))
+}

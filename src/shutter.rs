@@ -13,7 +13,9 @@
 
 use crate::camera::{Camera, Degenerate, Pose};
 use crate::timeline::Timeline;
+use crate::timeline::motion::Poses;
 use glam::DVec3;
+use std::sync::Arc;
 
 /// Instants an open interval is divided into. With 256, the ghosts of a streak up to 256
 /// pixels long stay within a pixel of each other: a continuous blur.
@@ -44,9 +46,19 @@ impl Shutter {
 pub struct Exposure {
     /// The camera (and lens) at the frame's time.
     pub camera: Camera,
-    /// With a shutter and a camera that moves while it is open, the camera at each instant;
-    /// otherwise empty.
+    /// With a shutter and a camera (or some object or light) that moves while it is open,
+    /// the camera at each instant; otherwise empty.
     pub instants: Vec<Camera>,
+    /// The poses of the objects and lights that move (None when none does).
+    pub motion: Option<Arc<Staged>>,
+}
+
+/// Where the objects and lights that move are during one frame: at its time, and at each
+/// instant of its open shutter when one of them moves while it is open (else no instants).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Staged {
+    pub at: Poses,
+    pub instants: Vec<Poses>,
 }
 
 /// Frame `n` worked out once: its time, the camera's pose there (what the fingerprint records)
@@ -128,6 +140,7 @@ impl Exposure {
         Exposure {
             camera: shift(&self.camera),
             instants: self.instants.iter().map(shift).collect(),
+            motion: self.motion.clone(),
         }
     }
 
@@ -136,6 +149,7 @@ impl Exposure {
         Exposure {
             camera,
             instants: Vec::new(),
+            motion: None,
         }
     }
 
@@ -148,8 +162,31 @@ impl Exposure {
         FrameView::of_frame(timeline, shutter, n).exposure
     }
 
-    /// `camera`, the camera at time `t`, and with a shutter the cameras of its open interval.
+    /// `camera`, the camera at time `t`, and with a shutter the cameras of its open interval;
+    /// the poses of what moves.
     fn around(
+        camera: Camera,
+        timeline: &Timeline,
+        shutter: Option<Shutter>,
+        t: f64,
+    ) -> Result<Exposure, NoCamera> {
+        let mut exposure = Exposure::cameras(camera, timeline, shutter, t)?;
+        if timeline.motion.is_empty() {
+            return Ok(exposure);
+        }
+        let staged = Staged::of(timeline, shutter, t);
+        // Objects that move while the shutter is open are sampled in time even where the
+        // camera holds still.
+        if !staged.instants.is_empty() && exposure.instants.is_empty() {
+            exposure.instants = vec![camera; INSTANTS];
+        }
+        exposure.motion = Some(Arc::new(staged));
+        Ok(exposure)
+    }
+
+    /// `camera`, and with a shutter the cameras of its open interval when the camera moves
+    /// while it is open.
+    fn cameras(
         camera: Camera,
         timeline: &Timeline,
         shutter: Option<Shutter>,
@@ -165,12 +202,35 @@ impl Exposure {
         if instants.iter().all(|c| *c == camera) {
             return Ok(Exposure::still(camera));
         }
-        Ok(Exposure { camera, instants })
+        Ok(Exposure {
+            camera,
+            instants,
+            motion: None,
+        })
     }
 
     /// Whether eye rays leave from more than one point: through a lens, or from a moving camera.
     pub(crate) fn sampled(&self) -> bool {
         self.camera.lens_radius > 0.0 || !self.instants.is_empty()
+    }
+}
+
+impl Staged {
+    /// The poses of `timeline`'s moving things at time t, and at each instant of the open
+    /// interval of `shutter` unless they all hold still while it is open.
+    pub(crate) fn of(timeline: &Timeline, shutter: Option<Shutter>, t: f64) -> Staged {
+        let at = timeline.poses_at(t);
+        let instants: Vec<Poses> = match shutter {
+            Some(s) => (0..INSTANTS)
+                .map(|j| timeline.poses_at(s.instant(timeline.fps, t, j)))
+                .collect(),
+            None => Vec::new(),
+        };
+        let still = instants.iter().all(|p| *p == at);
+        Staged {
+            at,
+            instants: if still { Vec::new() } else { instants },
+        }
     }
 }
 

@@ -473,6 +473,7 @@ fn a_camera_impossible_while_the_shutter_is_open_fails_that_frame() {
             Speed::Keys,
         ))),
         clock: Default::default(),
+        motion: Vec::new(),
     };
     let shutter = Shutter {
         angle: 360.0,

@@ -135,6 +135,7 @@ fn example_sequences_check_and_render_a_frame() {
         "glass",
         "mesh",
         "model",
+        "turntable",
     ] {
         let file = repo().join(format!("sequences/{name}.yaml"));
         let out = run_in(&tmp, &["check", file.to_str().unwrap()]);

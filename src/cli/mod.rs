@@ -108,9 +108,9 @@ pub struct BenchArgs {
     /// Runs per figure (the median is reported, with min and max).
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=1000))]
     pub(crate) runs: u64,
-    /// Only this figure: kernels, mesh, texture, render, threads, reflections, glass,
+    /// Only this figure: kernels, mesh, motion, texture, render, threads, reflections, glass,
     /// sequence, scaling or povray.
-    #[arg(long, value_parser = ["kernels", "mesh", "texture", "render", "threads", "reflections", "glass", "sequence", "scaling", "povray"])]
+    #[arg(long, value_parser = ["kernels", "mesh", "motion", "texture", "render", "threads", "reflections", "glass", "sequence", "scaling", "povray"])]
     pub(crate) only: Option<String>,
     /// Small sizes and scenes, to check the command quickly.
     #[arg(long)]

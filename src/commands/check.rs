@@ -9,7 +9,7 @@ use crate::output::{Compression, ExrPrecision, FileFormat};
 use crate::scene::{Image, Light, Scene, Shape, Sky, Texture};
 use crate::sequence::{self, Sequence};
 use crate::settings::Settings;
-use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
+use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline, motion::Thing};
 
 pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
     let seq = sequence::load_with(&args.file, &super::assets(&args.assets)?)?;
@@ -140,7 +140,7 @@ pub(crate) fn cost(
 pub(crate) fn summary(file: &str, seq: &Sequence, screen: Screen) -> Result<String, String> {
     let (scene, s) = (&seq.scene, &seq.settings);
     Ok(format!(
-        "{file}: ok\n  objects:    {}\n{}  materials:  {}\n{}{}  lights:     {}\n{}  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}  output:     {}\n",
+        "{file}: ok\n  objects:    {}\n{}  materials:  {}\n{}{}  lights:     {}\n{}  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}{}  output:     {}\n",
         objects(scene),
         super::meshes::summary(scene, screen)?,
         scene.materials.len(),
@@ -153,6 +153,7 @@ pub(crate) fn summary(file: &str, seq: &Sequence, screen: Screen) -> Result<Stri
         s.max_depth,
         picture(s),
         frames(&seq.timeline),
+        moving(&seq.timeline),
         timing(&seq.timeline),
         film(seq),
         printable(&seq.output)
@@ -413,6 +414,49 @@ fn frames(t: &Timeline) -> String {
             first => format!(", frames {first}-{}", t.last_frame()),
         },
     )
+}
+
+/// The `moving:` line when objects or lights have keys: each (up to four) with the fields its
+/// keys set and the frames between its first key and its last, e.g. `objects[1] (rotate)
+/// frames 0-96`.
+fn moving(t: &Timeline) -> String {
+    const SHOWN: usize = 4;
+    if t.motion.is_empty() {
+        return String::new();
+    }
+    let frame_at = |time: f64, up: bool| {
+        let at = time * t.fps;
+        let i = if up {
+            (at - 1e-6).ceil()
+        } else {
+            (at + 1e-6).floor()
+        };
+        t.first_frame() + (i.max(0.0) as u64).min(t.frame_count - 1)
+    };
+    let things: Vec<String> = t
+        .motion
+        .iter()
+        .take(SHOWN)
+        .map(|rig| {
+            let name = match rig.thing {
+                Thing::Object(i) => format!("objects[{i}]"),
+                Thing::Light(i) => format!("lights[{i}]"),
+            };
+            let fields: Vec<&str> = rig.fields().map(|f| f.name()).collect();
+            let (first, last) = (rig.times[0], rig.times[rig.times.len() - 1]);
+            format!(
+                "{name} ({}) frames {}-{}",
+                fields.join(", "),
+                frame_at(first, true),
+                frame_at(last, false)
+            )
+        })
+        .collect();
+    let more = match t.motion.len().saturating_sub(SHOWN) {
+        0 => String::new(),
+        n => format!(", and {n} more"),
+    };
+    format!("  moving:     {}{more}\n", things.join("; "))
 }
 
 /// The `picture:` line: sampling, encoding, exposure, alpha and compositing passes, what

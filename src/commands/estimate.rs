@@ -329,6 +329,7 @@ fn render_tile(
             .iter()
             .map(|c| aimed(c, s, tile))
             .collect(),
+        motion: exposure.motion.clone(),
     };
     tracer::render_or_stop(world, &turned, &settings, n, stop).map(|_| ())
 }

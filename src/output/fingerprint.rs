@@ -8,7 +8,8 @@ use super::format::{ExrPrecision, FileFormat};
 use crate::camera::{Camera, Pose};
 use crate::scene::{Intensity, Light, Material, Object, Scene, Shape, Sky, Texture};
 use crate::settings::{Adaptive, Precision, Sampler, Settings};
-use crate::shutter::FrameView;
+use crate::shutter::{Exposure, FrameView, Staged};
+use crate::timeline::motion::{Posed, Thing};
 use crate::transfer::Encoding;
 use glam::DVec3;
 
@@ -99,12 +100,34 @@ pub(crate) fn of_frame(run: &Hasher, view: &FrameView) -> String {
         Err(_) => tagged(&mut h, 1, &[]),
     }
     view.time.canon(&mut h);
+    // Only where objects or lights move: their poses at the frame's time and at each
+    // instant of the open shutter while they move during it.
+    if let Some(m) = motion(view) {
+        poses(&mut h, m);
+    }
     // Only with the motion pass, whose run part already differs (`Settings`).
     if let Some(next) = &view.next {
         h.write(b"next camera");
         next.canon(&mut h);
     }
     h.hex()
+}
+
+/// The poses of the objects and lights that move during the frame `view` shows, if any do.
+pub(crate) fn motion(view: &FrameView) -> Option<&Staged> {
+    match &view.exposure {
+        Ok(Exposure {
+            motion: Some(m), ..
+        }) => Some(m),
+        _ => None,
+    }
+}
+
+/// The bytes `poses`, then the poses at the frame's time and at each instant.
+pub(crate) fn poses(h: &mut Hasher, m: &Staged) {
+    h.write(b"poses");
+    m.at.canon(h);
+    m.instants.canon(h);
 }
 
 /// The canonical encoding: every value as fixed-size little-endian bytes (an f64 as its
@@ -203,6 +226,33 @@ macro_rules! canon_struct {
             }
         }
     };
+}
+
+/// A moving object (tag 0) or light (tag 1) by its index.
+impl Canon for Thing {
+    fn canon(&self, h: &mut Hasher) {
+        match self {
+            Thing::Object(i) => tagged(h, 0, &[i]),
+            Thing::Light(i) => tagged(h, 1, &[i]),
+        }
+    }
+}
+
+/// An object or light as posed, encoded as in the scene.
+impl Canon for Posed {
+    fn canon(&self, h: &mut Hasher) {
+        match self {
+            Posed::Object(o) => o.canon(h),
+            Posed::Light(l) => l.canon(h),
+        }
+    }
+}
+
+impl<A: Canon, B: Canon> Canon for (A, B) {
+    fn canon(&self, h: &mut Hasher) {
+        self.0.canon(h);
+        self.1.canon(h);
+    }
 }
 
 /// A tag byte, then the fields.

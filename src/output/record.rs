@@ -6,7 +6,7 @@
 //! (background, objects, lights, meshes, each named material) and the frame's camera as a
 //! 64-bit hash each, which says *what* changed without spelling out a whole scene.
 
-use super::fingerprint::{Canon, Hasher};
+use super::fingerprint::{self, Canon, Hasher};
 use super::format::{ExrPrecision, FileFormat};
 use crate::scene::{Material, Scene};
 use crate::sequence::Sequence;
@@ -45,8 +45,20 @@ pub(crate) fn of_run(seq: &Sequence, format: &FileFormat, fps: Option<(i32, u32)
 /// The run's lines and, last, the hash of what the fingerprint adds for the frame `view`
 /// shows (its number, camera, exposure and time).
 pub(crate) fn of_frame(run: &str, view: &FrameView) -> String {
-    let camera = super::fingerprint::of_frame(&Hasher::new(), view);
-    format!("{run}camera={}", &camera[..16])
+    let Some(m) = fingerprint::motion(view) else {
+        let camera = fingerprint::of_frame(&Hasher::new(), view);
+        return format!("{run}camera={}", &camera[..16]);
+    };
+    // Where objects or lights move, their poses are a line of their own, so that a changed
+    // key is named as such rather than as the camera.
+    let mut still = view.clone();
+    if let Ok(e) = &mut still.exposure {
+        e.motion = None;
+    }
+    let camera = fingerprint::of_frame(&Hasher::new(), &still);
+    let mut h = Hasher::new();
+    fingerprint::poses(&mut h, m);
+    format!("{run}camera={}\nposes={}", &camera[..16], &h.hex()[..16])
 }
 
 fn settings(s: &Settings, format: &FileFormat) -> Vec<(String, String)> {
@@ -301,7 +313,7 @@ fn describe<'a>(changed: &[&str], pair: impl Fn(&str) -> Pair<'a>) -> String {
         let (old, new) = pair(k);
         let hashed = matches!(
             *k,
-            "background" | "objects" | "lights" | "meshes" | "camera"
+            "background" | "objects" | "lights" | "meshes" | "camera" | "poses"
         ) || k.starts_with("materials");
         parts.push(match (hashed, old, new) {
             (true, Some(o), Some(n)) => match material_change(o, n) {

@@ -249,13 +249,15 @@ pub(crate) fn render_seeded(
         (view.exposure.as_ref()).map_err(|&source| RunError::Camera { frame: n, source })?;
     let mut frame = tracer::render(world, exposure, settings, seed);
     let never = std::sync::atomic::AtomicBool::new(false);
-    frame.aov = tracer::aov::render(
-        world,
-        &exposure.camera,
-        view.next.as_ref(),
-        settings,
-        &never,
-    );
+    if !settings.aov.is_empty() {
+        frame.aov = tracer::aov::render(
+            &world.at_frame(exposure),
+            &exposure.camera,
+            view.next.as_ref(),
+            settings,
+            &never,
+        );
+    }
     Ok(frame)
 }
 

@@ -88,8 +88,10 @@ impl Renderer {
             return Ok(None);
         };
         let next = view.next.as_ref();
-        frame.aov =
-            tracer::aov::render(&self.world, &exposure.camera, next, settings, &self.cancel);
+        if !settings.aov.is_empty() {
+            let world = self.world.at_frame(exposure);
+            frame.aov = tracer::aov::render(&world, &exposure.camera, next, settings, &self.cancel);
+        }
         if self.cancel.load(std::sync::atomic::Ordering::Relaxed) {
             return Ok(None);
         }

@@ -7,7 +7,7 @@
 //! ```
 
 use super::*;
-use crate::scene::{Mesh, Placement};
+use crate::scene::{Mesh, Placement, rotation};
 use glam::DMat3;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -231,14 +231,8 @@ fn placement(path: &str, m: &raw::Mesh, k: i32, mesh: &Mesh) -> Check<Placement>
             );
         }
     }
-    let origin = m.origin.unwrap_or_default();
-    if origin != raw::Origin::File {
-        let (lo, hi) = placed_bounds(mesh, scale, rotation, DVec3::ZERO);
-        let centre = (lo + hi) * 0.5;
-        translate -= match origin {
-            raw::Origin::Bottom => DVec3::new(centre.x, lo.y, centre.z),
-            _ => centre,
-        };
+    if let Some(offset) = origin_offset(mesh, scale, rotation, m.origin.unwrap_or_default()) {
+        translate -= offset;
     }
     Ok(Placement {
         scale,
@@ -283,7 +277,26 @@ fn finite(field: &str, v: raw::V3, what: &str) -> Check<DVec3> {
 /// negated, `+` allowed) to +y, by quarter turns, so it is exact: z → +y is −90° about X
 /// (Blender's Z-up, −Y-forward files then face +Z), x → +y is 90° about Z, −y is 180° about X,
 /// −z is 90° about X, −x is −90° about Z.
-fn up_axis(path: &str, up: Option<&str>) -> Check<DMat3> {
+/// What `origin: center|bottom` subtracts from `translate`: the centre of the model's
+/// bounds once scaled and rotated, or the centre of their bottom; None for `origin: file`.
+pub(super) fn origin_offset(
+    mesh: &Mesh,
+    scale: DVec3,
+    rotation: DMat3,
+    origin: raw::Origin,
+) -> Option<DVec3> {
+    if origin == raw::Origin::File {
+        return None;
+    }
+    let (lo, hi) = placed_bounds(mesh, scale, rotation, DVec3::ZERO);
+    let centre = (lo + hi) * 0.5;
+    Some(match origin {
+        raw::Origin::Bottom => DVec3::new(centre.x, lo.y, centre.z),
+        _ => centre,
+    })
+}
+
+pub(super) fn up_axis(path: &str, up: Option<&str>) -> Check<DMat3> {
     let degrees = match up.map(|u| u.trim_start_matches('+')) {
         None | Some("y") | Some("Y") => [0.0, 0.0, 0.0],
         Some("z") | Some("Z") => [-90.0, 0.0, 0.0],
@@ -336,42 +349,6 @@ pub(crate) fn placed_bounds(
 /// magnitude brought to [0.5, 1) when outside [2^−32, 2^32]): scaled coordinates must stay
 /// normal f64 numbers, as spheres' radii do.
 const MIN_SCALE: f64 = 1e-100;
-
-/// Rz · Ry · Rx for angles in degrees, right-handed (counter-clockwise seen from the positive
-/// axis). Whole multiples of 90° use exact 0 and ±1, so axis-aligned models stay aligned.
-pub fn rotation(degrees: DVec3) -> DMat3 {
-    let (sx, cx) = sin_cos(degrees.x);
-    let (sy, cy) = sin_cos(degrees.y);
-    let (sz, cz) = sin_cos(degrees.z);
-    let rx = DMat3::from_cols(
-        DVec3::new(1.0, 0.0, 0.0),
-        DVec3::new(0.0, cx, sx),
-        DVec3::new(0.0, -sx, cx),
-    );
-    let ry = DMat3::from_cols(
-        DVec3::new(cy, 0.0, -sy),
-        DVec3::new(0.0, 1.0, 0.0),
-        DVec3::new(sy, 0.0, cy),
-    );
-    let rz = DMat3::from_cols(
-        DVec3::new(cz, sz, 0.0),
-        DVec3::new(-sz, cz, 0.0),
-        DVec3::new(0.0, 0.0, 1.0),
-    );
-    rz * (ry * rx)
-}
-
-/// sin and cos of an angle in degrees: exact at whole multiples of 90°, else libm's of the
-/// angle (reduced to (−360, 360) by `%`) times π/180.
-fn sin_cos(degrees: f64) -> (f64, f64) {
-    let d = degrees % 360.0;
-    if d % 90.0 == 0.0 {
-        let quarter = ((d / 90.0) as i64).rem_euclid(4);
-        return [(0.0, 1.0), (1.0, 0.0), (0.0, -1.0), (-1.0, 0.0)][quarter as usize];
-    }
-    let r = d.to_radians();
-    (libm::sin(r), libm::cos(r))
-}
 
 /// The placed model must stay within the coordinates every other object may have.
 fn check_reach(path: &str, place: &Placement, mesh: &Mesh) -> Check<()> {

@@ -12,6 +12,7 @@ mod locate;
 pub mod mesh;
 mod meshes;
 mod messages;
+mod motion;
 pub(crate) mod raw;
 mod scene;
 mod settings;
@@ -384,7 +385,7 @@ pub enum Film {
 fn film(s: &Settings, timeline: &Timeline) -> Film {
     if timeline.widest_aperture() > 0.0 {
         Film::Lens
-    } else if s.shutter.is_some() && timeline.moves() {
+    } else if s.shutter.is_some() && (timeline.moves() || !timeline.motion.is_empty()) {
         Film::Shutter
     } else {
         Film::Pinhole
@@ -402,13 +403,14 @@ fn validate(
     let (scene, mut warnings) = scene_of(&raw, folders)?;
     aim::resolve(&mut raw, &scene, &object_names)?;
     let camera = raw.camera.as_ref().map(camera_key).transpose()?;
+    let interpolation = raw.timeline.as_ref().and_then(|t| t.interpolation).map_or(
+        crate::timeline::Interpolation::Smooth,
+        motion::interpolation_of,
+    );
+    let things = |frames: timeline::Frames| motion::rigs(&raw, &scene, frames, interpolation);
     let loaded = match (&raw.timeline, camera) {
-        (Some(t), camera) => timeline::timeline(t, camera, settings.shutter)?,
-        (None, Some(key)) => timeline::Loaded {
-            timeline: Timeline::still(key),
-            warnings: Vec::new(),
-            problem: None,
-        },
+        (Some(t), camera) => timeline::timeline(t, camera, settings.shutter, &things)?,
+        (None, Some(key)) => still_film(key, &things)?,
         (None, None) => return invalid("camera", "a sequence needs a `camera:` or a `timeline:`"),
     };
     let timeline = loaded.timeline;
@@ -432,6 +434,22 @@ fn validate(
         },
     };
     Ok((seq, loaded.problem))
+}
+
+/// A film without `timeline:`: one frame of a still camera, or, when objects or lights have
+/// keys, frames at 24 fps from 0 to their last key.
+fn still_film(key: Key, things: timeline::Things) -> Check<timeline::Loaded> {
+    let mut still = Timeline::still(key);
+    still.motion = things((&still.clock, still.fps))?;
+    if let Some(last) = timeline::last_thing_key(&still.motion) {
+        still.frame_count = timeline::keyed_frames(last, still.fps)?;
+        still.clock.duration = Some(last);
+    }
+    Ok(timeline::Loaded {
+        timeline: still,
+        warnings: Vec::new(),
+        problem: None,
+    })
 }
 
 /// The background, materials, objects (meshes read from below `folders`) and lights, checked

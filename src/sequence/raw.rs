@@ -299,6 +299,36 @@ pub struct Object {
     pub mesh: Option<Mesh>,
     /// What camera keys call it (`look_at: { object: NAME }`) and messages name it by.
     pub name: Option<String>,
+    /// Keys that move it (docs/sequence-file.md#things-that-move).
+    pub keys: Option<Vec<ThingKey>>,
+    /// How its keys are interpolated; default `timeline.interpolation`, else smooth.
+    pub interpolation: Option<Interpolation>,
+}
+
+/// A key on an object or light: its time as a camera key's, and the fields it moves.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ThingKey {
+    #[serde(default, deserialize_with = "key_time")]
+    pub time: Option<KeyTime>,
+    pub frame: Option<u64>,
+    pub ease: Option<String>,
+    pub scale: Option<Scale>,
+    pub rotate: Option<V3>,
+    pub translate: Option<V3>,
+    pub center: Option<V3>,
+    pub radius: Option<f64>,
+    pub point: Option<V3>,
+    pub normal: Option<V3>,
+    pub position: Option<V3>,
+    pub direction: Option<V3>,
+    pub inner_angle: Option<f64>,
+    pub outer_angle: Option<f64>,
+    pub ambient: Option<V3>,
+    pub diffuse: Option<V3>,
+    pub specular: Option<V3>,
+    pub color: Option<V3>,
+    pub corner: Option<V3>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -371,6 +401,10 @@ pub struct Light {
     pub ambient: Option<AmbientLight>,
     pub sphere: Option<SphereLight>,
     pub rect: Option<RectLight>,
+    /// Keys that move it or change its colours.
+    pub keys: Option<Vec<ThingKey>>,
+    /// How its keys are interpolated; default `timeline.interpolation`, else smooth.
+    pub interpolation: Option<Interpolation>,
 }
 
 #[derive(Debug, Deserialize)]

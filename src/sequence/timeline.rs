@@ -13,6 +13,7 @@ use crate::timeline::{
 
 /// Largest `timeline.first_frame`: frame numbers stay below 2^53, exact in f64.
 pub(crate) const MAX_FIRST_FRAME: u64 = 1 << 50;
+use crate::timeline::motion::Rig;
 use glam::DVec3;
 
 /// A timeline that loaded, with what is worth a warning and, separately, the first problem
@@ -23,10 +24,14 @@ pub(super) struct Loaded {
     pub(crate) problem: Option<Invalid>,
 }
 
+/// Things that move, keyed on the clock of the timeline being loaded.
+pub(super) type Things<'a> = &'a dyn Fn(Frames) -> Check<Vec<Rig>>;
+
 pub(super) fn timeline(
     t: &raw::Timeline,
     camera: Option<Key>,
     shutter: Option<Shutter>,
+    things: Things,
 ) -> Check<Loaded> {
     let (fps, fraction) = match t.fps.unwrap_or(raw::Fps::Number(24.0)) {
         raw::Fps::Number(fps) => (fps, None),
@@ -52,16 +57,27 @@ pub(super) fn timeline(
         duration: None,
     };
     let path = path(t, camera, (&clock, fps))?;
+    let motion = things((&clock, fps))?;
+    // Without a duration the film ends on the last key, the camera's or a moving thing's.
+    let last_key = |k: &Keyed| {
+        let camera = k.keys.last().map_or(0.0, |k| k.time);
+        last_thing_key(&motion).map_or(camera, |m| camera.max(m))
+    };
     clock.duration = match (&path, t.duration) {
         (_, Some(d)) => Some(d),
         (TimelinePath::Orbit(o), None) => Some(o.duration),
-        (TimelinePath::Keys(k), None) => k.keys.last().map(|k| k.time),
+        (TimelinePath::Keys(k), None) => Some(last_key(k)),
+    };
+    let frame_count = match (&path, t.duration) {
+        (TimelinePath::Keys(k), None) => keyed_frames(last_key(k), fps)?,
+        _ => frame_count(t, &path, fps)?,
     };
     let timeline = Timeline {
         fps,
-        frame_count: frame_count(t, &path, fps)?,
+        frame_count,
         path,
         clock,
+        motion,
     };
     let warnings = t
         .duration
@@ -77,7 +93,7 @@ pub(super) fn timeline(
 }
 
 /// The clock's frame numbers and rate, for keys given by `frame:`.
-type Frames<'a> = (&'a Clock, f64);
+pub(super) type Frames<'a> = (&'a Clock, f64);
 
 fn path(t: &raw::Timeline, camera: Option<Key>, frames: Frames) -> Check<TimelinePath> {
     match (&t.keyframes, &t.orbit) {
@@ -96,6 +112,34 @@ fn path(t: &raw::Timeline, camera: Option<Key>, frames: Frames) -> Check<Timelin
         ),
         (None, Some(o)) => Ok(TimelinePath::Orbit(orbit(o, camera)?)),
     }
+}
+
+/// The time of the last key of anything that moves besides the camera.
+pub(super) fn last_thing_key(motion: &[Rig]) -> Option<f64> {
+    motion
+        .iter()
+        .filter_map(|r| r.times.last().copied())
+        .reduce(f64::max)
+}
+
+/// The frames of a film that ends on its last key, at `last` seconds.
+pub(super) fn keyed_frames(last: f64, fps: f64) -> Check<u64> {
+    let frames = frames_to(last, fps);
+    if (1.0..=MAX_FRAMES as f64).contains(&frames) {
+        return Ok(frames as u64);
+    }
+    invalid(
+        "timeline.duration",
+        format!(
+            "duration × fps must give 1 to {MAX_FRAMES} frames {}",
+            got(format!(
+                "ending on the last keyframe at {} s at {} fps takes {} frames",
+                num(last),
+                num(fps),
+                num(frames)
+            ))
+        ),
+    )
 }
 
 /// round(duration × fps) with a duration (an orbit has its own); otherwise up to the last key.
@@ -216,20 +260,14 @@ fn keyframes(keys: &[raw::Keyframe], camera: Option<Key>, frames: Frames) -> Che
     let mut out: Vec<Key> = Vec::with_capacity(keys.len());
     for (i, k) in keys.iter().enumerate() {
         let path = format!("timeline.keyframes[{i}]");
-        let (time, field) = key_time(&path, k, frames)?;
-        if let Some(prev) = out.last()
-            && time <= prev.time
-        {
-            return invalid(
-                format!("{path}.{field}"),
-                format!(
-                    "keyframe times must increase strictly; keyframe {} is at {} {}",
-                    i - 1,
-                    num(prev.time),
-                    got_num(time)
-                ),
-            );
-        }
+        let (time, field) = key_time(&path, (k.time, k.frame), frames)?;
+        increasing(
+            &format!("{path}.{field}"),
+            "keyframe",
+            i,
+            out.last().map(|k| k.time),
+            time,
+        )?;
         let before = out.last().copied().or(camera);
         let pose = key_pose(&path, k, before.map(|b| b.pose))?;
         let ease = ease(&path, i, keys.len(), k.ease.as_deref())?;
@@ -254,8 +292,12 @@ fn keyframes(keys: &[raw::Keyframe], camera: Option<Key>, frames: Frames) -> Che
 
 /// A key's time in seconds, and the field that gave it: `time:` as a number, or a fraction
 /// divided once in f64; or `frame:`, at exactly the time that frame shows (`Clock::time_of`).
-fn key_time(path: &str, k: &raw::Keyframe, (clock, fps): Frames) -> Check<(f64, &'static str)> {
-    let time = match (k.time, k.frame) {
+pub(super) fn key_time(
+    path: &str,
+    (time, frame): (Option<raw::KeyTime>, Option<u64>),
+    (clock, fps): Frames,
+) -> Check<(f64, &'static str)> {
+    let time = match (time, frame) {
         (Some(_), Some(_)) => {
             return invalid(
                 format!("{path}.frame"),
@@ -316,8 +358,30 @@ fn key_pose(path: &str, k: &raw::Keyframe, before: Option<Pose>) -> Check<Pose> 
     })
 }
 
+/// Key `i` of a list (a `noun`) at `time` comes strictly after the one before, at `before`.
+pub(super) fn increasing(
+    path: &str,
+    noun: &str,
+    i: usize,
+    before: Option<f64>,
+    time: f64,
+) -> Check<()> {
+    match before {
+        Some(prev) if time <= prev => invalid(
+            path,
+            format!(
+                "{noun} times must increase strictly; {noun} {} is at {} {}",
+                i - 1,
+                num(prev),
+                got_num(time)
+            ),
+        ),
+        _ => Ok(()),
+    }
+}
+
 /// `stop` or `pass`; the per-segment eases of earlier versions are refused with what to write.
-fn ease(path: &str, i: usize, count: usize, value: Option<&str>) -> Check<Ease> {
+pub(super) fn ease(path: &str, i: usize, count: usize, value: Option<&str>) -> Check<Ease> {
     let next = |what: &str| match i + 1 < count {
         true => format!("{what} and on keyframe {}", i + 1),
         false => what.to_string(),

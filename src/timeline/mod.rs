@@ -20,6 +20,7 @@
 //! through its key values (`shape`) and a timing along it (`timing`), so its speed is
 //! continuous through the keys. A key's `ease: stop` halts every track there.
 
+pub mod motion;
 mod shape;
 mod timing;
 mod track;
@@ -110,6 +111,9 @@ pub struct Timeline {
     pub path: Path,
     /// Frame numbers and their times.
     pub clock: Clock,
+    /// The objects and lights that move, in file order (objects first); empty when only the
+    /// camera can.
+    pub motion: Vec<motion::Rig>,
 }
 
 /// How frame numbers map to time: frames are numbered `first_frame` … `first_frame +
@@ -265,6 +269,7 @@ impl Timeline {
                 Speed::Keys,
             ))),
             clock: Clock::default(),
+            motion: Vec::new(),
         }
     }
 
@@ -296,6 +301,11 @@ impl Timeline {
     pub(crate) fn running_time_text(&self) -> String {
         let text = format!("{:.2}", self.frame_count as f64 / self.fps);
         text.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+
+    /// The poses of every object and light that moves, at time t (empty when none does).
+    pub fn poses_at(&self, t: f64) -> motion::Poses {
+        motion::poses_at(&self.motion, t)
     }
 
     pub fn pose_of(&self, n: u64) -> Pose {

@@ -29,6 +29,7 @@ fn keyed(keys: Vec<Key>, interpolation: Interpolation, speed: Speed) -> Timeline
         frame_count: 100,
         path: Path::Keys(Box::new(Keyed::new(keys, interpolation, speed))),
         clock: Default::default(),
+        motion: Vec::new(),
     }
 }
 
@@ -209,6 +210,7 @@ fn orbit_has_constant_radius_and_speed_and_loops() {
         frame_count: 144,
         path: Path::Orbit(o),
         clock: Default::default(),
+        motion: Vec::new(),
     };
     let step = tl.pose_of(1).position.distance(tl.pose_of(0).position);
     for n in 0..144 {

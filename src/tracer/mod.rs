@@ -29,7 +29,8 @@ mod triangle;
 use crate::frame::Frame;
 use crate::scene::Scene;
 pub use crate::settings::{Adaptive, Precision, Sampler, Settings};
-use crate::shutter::Exposure;
+use crate::shutter::{Exposure, Staged};
+use crate::timeline::motion::{Posed, Poses, Thing};
 use glam::DVec3;
 pub use kernel::Kernel;
 use rayon::prelude::*;
@@ -73,6 +74,11 @@ impl World {
             .iter()
             .map(|m| Arc::new(bvh::Bvh::build(m)))
             .collect();
+        World::with_bvhs(scene, bvhs)
+    }
+
+    /// The world of `scene`, whose meshes' hierarchies are `bvhs`.
+    fn with_bvhs(scene: Scene, bvhs: Vec<Arc<bvh::Bvh>>) -> World {
         let geometry = accel::Geometry::subset(&scene.objects, &bvhs, |_| true);
         let material = |i: usize| &scene.materials[scene.objects[i].material];
         let clear = clear(&scene, &bvhs);
@@ -100,6 +106,26 @@ impl World {
             world.curvature = texture::curvatures(&world);
         }
         world
+    }
+
+    /// This world with the objects and lights that move at `poses`: the meshes' hierarchies
+    /// and the materials stay, the top level, the spheres' hierarchy and the lights are
+    /// built anew (`Geometry::subset`), as for a still scene that placed them there.
+    pub fn posed(&self, poses: &Poses) -> World {
+        let mut scene = self.scene.clone();
+        for (thing, posed) in poses {
+            match (*thing, *posed) {
+                (Thing::Object(i), Posed::Object(o)) => scene.objects[i] = o,
+                (Thing::Light(i), Posed::Light(l)) => scene.lights[i] = l,
+                // A rig poses the kind of thing it names (`Rig::at` starts from it).
+                _ => {}
+            }
+        }
+        let world = World::with_bvhs(scene, self.bvhs.clone());
+        World {
+            point_sampled: self.point_sampled,
+            ..world
+        }
     }
 
     /// Whether some object is a mesh (shading then lifts secondary rays off triangles).
@@ -198,10 +224,18 @@ fn render_frame(
     frame: u64,
     stop: &AtomicBool,
 ) -> Option<Frame> {
+    // What moves is posed: at the frame's time, and at each instant of an open shutter.
+    let staged = exposure.motion.as_ref().map(|m| stage(world, m));
+    let (world, instants) = match &staged {
+        Some((at, instants)) => (at, instants.as_slice()),
+        None => (world, &[][..]),
+    };
     // f32 traces in coordinates relative to the frame's camera, shifted in f64: positions
     // near the camera keep their precision however far from the origin the scene lies. A
-    // frame f32 cannot resolve is traced in f64 (see `precision`).
+    // frame f32 cannot resolve is traced in f64 (see `precision`), as is one whose objects
+    // move while the shutter is open.
     let f32_frame = settings.precision == Precision::F32
+        && instants.is_empty()
         && precision::f32_limit(&world.scene, exposure, settings).is_none();
     let settings = &Settings {
         precision: if f32_frame {
@@ -240,6 +274,7 @@ fn render_frame(
         samples: Samples::All(settings.samples),
         rounds,
         from_origin: &from_origin,
+        instants,
         stop,
     };
     let mut planes = Planes {
@@ -293,6 +328,23 @@ fn render_frame(
         samples: stats.samples,
         rays: stats.rays,
     })
+}
+
+/// The world at the frame's time, and at each instant of the open shutter when something
+/// moves while it is open (built in parallel; each is a pure function of its poses).
+fn stage(world: &World, staged: &Staged) -> (World, Vec<World>) {
+    let instants = staged.instants.par_iter().map(|p| world.posed(p)).collect();
+    (world.posed(&staged.at), instants)
+}
+
+impl World {
+    /// This world as frame `exposure` sees it at its time: posed when something moves.
+    pub fn at_frame(&self, exposure: &Exposure) -> std::borrow::Cow<'_, World> {
+        match &exposure.motion {
+            Some(m) => std::borrow::Cow::Owned(self.posed(&m.at)),
+            None => std::borrow::Cow::Borrowed(self),
+        }
+    }
 }
 
 /// Which samples a pass traces for each selected pixel.

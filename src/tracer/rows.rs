@@ -34,6 +34,9 @@ pub(super) struct Pass<'a> {
     pub rounds: bool,
     /// `Geometry::from_origin` of the camera position.
     pub from_origin: &'a [FromOrigin],
+    /// The world at each instant of the open shutter when objects or lights move while it
+    /// is open (each sample is traced in its instant's); otherwise empty.
+    pub instants: &'a [World],
     /// Set when the frame is no longer wanted: packets and samples not yet begun are skipped.
     pub stop: &'a AtomicBool,
 }
@@ -297,16 +300,23 @@ fn packet<V: Lanes>(
             }
         }
         let lights = light_seeds.as_ref().map(|seeds| LightSeeds { seeds, k });
+        // While things move under the open shutter, each lane's instant (else None).
+        let mut js = None;
         let eye = match (pass.exposure, &film) {
             (Some(exposure), Some(x)) => Eye {
-                rays: sampled_rays(
-                    pass,
-                    exposure,
-                    (row, col),
-                    (u, v),
-                    &x[4],
-                    (V::load(&x[2]), V::load(&x[3])),
-                ),
+                rays: {
+                    if !pass.instants.is_empty() {
+                        js = Some(std::array::from_fn(|k| instant(x[4][k]) as u8));
+                    }
+                    sampled_rays(
+                        pass,
+                        exposure,
+                        (row, col),
+                        (u, v),
+                        &x[4],
+                        (V::load(&x[2]), V::load(&x[3])),
+                    )
+                },
                 active: V::M::from_bits(px.valid),
                 from_origin: None,
                 transparent: s.alpha,
@@ -326,7 +336,16 @@ fn packet<V: Lanes>(
                 lights,
             },
         };
-        let (c, covered) = path::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays);
+        let (c, covered) = match &js {
+            None => path::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays),
+            Some(js) => {
+                let rays = &mut stats.rays;
+                V::outlined(
+                    #[inline(always)]
+                    || in_instants(pass, &eye, js, rays),
+                )
+            }
+        };
         sum = sum + c;
         if s.alpha {
             cover = cover + V::select(covered, one, zero);
@@ -493,8 +512,7 @@ fn sampled_rays<V: Lanes>(
     let mut cameras = [&exposure.camera; MAX_LANES];
     if !exposure.instants.is_empty() {
         for lane in 0..V::N {
-            let j = ((times[lane] * INSTANTS as f64) as usize).min(INSTANTS - 1);
-            cameras[lane] = &exposure.instants[j];
+            cameras[lane] = &exposure.instants[instant(times[lane])];
         }
     }
     let s = pass.settings;
@@ -526,6 +544,47 @@ fn sampled_rays<V: Lanes>(
         dir: V3::select(open, (target - lens).normalize(), pinhole),
         leaving: V::splat(-1.0),
     }
+}
+
+/// The instant (0 … INSTANTS − 1) a sample at time coordinate `time` in [0, 1) falls in.
+#[inline(always)]
+fn instant(time: f64) -> usize {
+    ((time * INSTANTS as f64) as usize).min(INSTANTS - 1)
+}
+
+/// Traces each lane of `eye` in the world of its own instant `js[lane]` (things move under
+/// the open shutter): the lanes that share an instant go together, the others masked off (a
+/// lane's result never depends on the others', so each is what it would be alone).
+#[inline(always)]
+fn in_instants<V: Lanes>(
+    pass: &Pass,
+    eye: &Eye<V>,
+    js: &[u8; MAX_LANES],
+    rays: &mut u64,
+) -> (V3<V>, V::M) {
+    let mut left = eye.active.bits();
+    let (mut colour, mut covered) = (V3::<V>::zero(), V::M::from_bits(0));
+    while left != 0 {
+        let j = js[left.trailing_zeros() as usize];
+        let same = (0..V::N)
+            .filter(|&k| left >> k & 1 == 1 && js[k] == j)
+            .fold(0u32, |m, k| m | 1 << k);
+        left &= !same;
+        let mask = V::M::from_bits(same);
+        let one = Eye {
+            rays: eye.rays,
+            active: mask,
+            from_origin: None,
+            transparent: eye.transparent,
+            footprint: eye.footprint,
+            lights: eye.lights,
+        };
+        let world = &pass.instants[usize::from(j)];
+        let (c, hit) = path::trace_packet(world, &one, pass.settings.max_depth, rays);
+        colour = V3::select(mask, c, colour);
+        covered = covered.or(hit.and(mask));
+    }
+    (colour, covered)
 }
 
 /// Background `Z`: far beyond any scene a compositor meets, yet finite, so arithmetic on the

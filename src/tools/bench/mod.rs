@@ -19,6 +19,7 @@ use std::time::Instant;
 
 mod kernels;
 mod mesh;
+mod motion;
 mod texture;
 
 const TALK: &str = include_str!("../../../sequences/talk.yaml");
@@ -230,6 +231,9 @@ pub fn run(o: &Options, out: &mut dyn FnMut(&str)) -> Result<(), BenchError> {
     }
     if want("mesh") {
         mesh::meshes(o, out, &cmd("mesh"))?;
+    }
+    if want("motion") {
+        motion::motion(o, out, &cmd("motion"))?;
     }
     if want("texture") {
         texture::textures(o, out, &cmd("texture"))?;
