@@ -829,3 +829,34 @@ fn chan_pans_are_zero_straight_up_and_never_jump() {
     }
     assert!(orbit[47][5].abs() > 300.0, "{:?}", orbit[47]);
 }
+
+/// `camera --format chan` printed −180 for the pan of a camera at (0, 0, −5) looking at the
+/// origin (atan2 of −0), and −180 for the roll with up −y or looking straight down with up
+/// +z, where the docs give angles in (−180, 180]: a half turn now reads 180.
+#[test]
+fn chan_half_turns_read_180() {
+    let tmp = scratch("chan-half-turn");
+    let cases = [
+        ("back.yaml", "position: [0, 0, -5], look_at: [0, 0, 0]", 5),
+        (
+            "flip.yaml",
+            "position: [0, 0, 5], look_at: [0, 0, 0], up: [0, -1, 0]",
+            6,
+        ),
+        (
+            "down.yaml",
+            "position: [0, 5, 0], look_at: [0, 0, 0], up: [0, 0, 1]",
+            6,
+        ),
+    ];
+    for (file, camera, column) in cases {
+        let yaml = sequence(32, 24, &format!("camera: {{ {camera} }}\n"));
+        std::fs::write(tmp.join(file), yaml).unwrap();
+        let out = run_in(&tmp, &["camera", file, "--format", "chan", "--frames", "0"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let text = String::from_utf8(out.stdout).unwrap();
+        let angles: Vec<f64> = text.split(' ').map(|v| v.trim().parse().unwrap()).collect();
+        assert_eq!(angles[column], 180.0, "{file}: {text}");
+        assert!(angles[4..7].iter().all(|a| *a > -180.0), "{file}: {text}");
+    }
+}
