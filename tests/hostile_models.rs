@@ -271,6 +271,25 @@ fn models_in_any_units_render_the_same_pixels() {
             && err.contains("at least 1e-100 across"),
         "{err}"
     );
+    // With `fit` the fitted size is what must hold: a model 1e-150 (or 1e150) across with
+    // `scale: 1, fit: 2.2` is 2.2 across, as the model in units of 1 is (it was refused:
+    // "this scale makes the placed model about 2.20e-150 across").
+    let fitted = |exp: i32| {
+        let yaml = placing(&write(exp), "scale: 1, fit: 2.2, ");
+        std::fs::write(tmp.join("seq.yaml"), yaml).unwrap();
+        let png = format!("f{exp}.png");
+        let out = run_in(&tmp, &["render", "seq.yaml", "-q", "--force", "-o", &png]);
+        assert!(out.status.success(), "1e{exp} fitted: {}", stderr(&out));
+        read_png(&tmp.join(png)).2
+    };
+    let unit_fitted = fitted(0);
+    for exp in [-150, 150] {
+        let image = fitted(exp);
+        let differ = (image.chunks(3).zip(unit_fitted.chunks(3)))
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(differ <= 12, "1e{exp} fitted: {differ} pixels differ");
+    }
 }
 
 /// A PNG of `side`×`side` black pixels, written fast (it compresses to almost nothing).
