@@ -452,3 +452,15 @@ fn small_refusals_say_what_is_true() {
         }
     }
 }
+
+/// An OBJ comment ending in `\` (`# exported to C:\models\`) swallowed the next line, here
+/// the first vertex, so `f 1 2 4` named a fourth vertex the file did not have. A comment now
+/// ends at its line, as other OBJ readers have it; a `\` outside a comment still continues.
+#[test]
+fn an_obj_comment_ending_in_a_backslash_ends_at_its_line() {
+    let tmp = scratch("obj-comment-backslash");
+    let obj = b"# exported to C:\\models\\\nv 5 5 5\nv 1 -1 0\nv 1 \\\n 1 0\nv -1 1 0\nf 1 2 4\nf 2 3 4\n";
+    let (code, said, err) = check_model(&tmp, "path.obj", obj);
+    assert_eq!(code, Some(0), "{said}{err}");
+    assert!(!said.contains("degenerate"), "{said}");
+}
