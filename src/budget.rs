@@ -9,7 +9,9 @@
 
 /// Bytes a triangle takes once traced: its share of the bottom-level hierarchy (nodes and the
 /// triangles stored in its leaves), counted before the hierarchy is built. Update with the
-/// hierarchy: conservative for today's (`check` prints its real size per mesh).
+/// hierarchy: conservative for today's (`check` prints its real size per mesh). Measured
+/// 2026-11-27 on a 2M-triangle grid: nodes and order 46 bytes a triangle, the f64 copy of
+/// the triangles 104 (the f32 one 52); while building, 28 for the boxes and the nodes twice.
 pub(crate) const HIERARCHY_BYTES_PER_TRIANGLE: u64 = 160;
 
 /// What a mesh of `triangles` triangles adds once its hierarchy is built.

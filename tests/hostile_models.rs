@@ -271,6 +271,25 @@ fn models_in_any_units_render_the_same_pixels() {
             && err.contains("at least 1e-100 across"),
         "{err}"
     );
+    // With `fit` the fitted size is what must hold: a model 1e-150 (or 1e150) across with
+    // `scale: 1, fit: 2.2` is 2.2 across, as the model in units of 1 is (it was refused:
+    // "this scale makes the placed model about 2.20e-150 across").
+    let fitted = |exp: i32| {
+        let yaml = placing(&write(exp), "scale: 1, fit: 2.2, ");
+        std::fs::write(tmp.join("seq.yaml"), yaml).unwrap();
+        let png = format!("f{exp}.png");
+        let out = run_in(&tmp, &["render", "seq.yaml", "-q", "--force", "-o", &png]);
+        assert!(out.status.success(), "1e{exp} fitted: {}", stderr(&out));
+        read_png(&tmp.join(png)).2
+    };
+    let unit_fitted = fitted(0);
+    for exp in [-150, 150] {
+        let image = fitted(exp);
+        let differ = (image.chunks(3).zip(unit_fitted.chunks(3)))
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(differ <= 12, "1e{exp} fitted: {differ} pixels differ");
+    }
 }
 
 /// A PNG of `side`×`side` black pixels, written fast (it compresses to almost nothing).
@@ -432,4 +451,89 @@ fn small_refusals_say_what_is_true() {
             None => assert!(out.status.success(), "{yaml}: {err}"),
         }
     }
+}
+
+/// An OBJ comment ending in `\` (`# exported to C:\models\`) swallowed the next line, here
+/// the first vertex, so `f 1 2 4` named a fourth vertex the file did not have. A comment now
+/// ends at its line, as other OBJ readers have it; a `\` outside a comment still continues.
+#[test]
+fn an_obj_comment_ending_in_a_backslash_ends_at_its_line() {
+    let tmp = scratch("obj-comment-backslash");
+    let obj = b"# exported to C:\\models\\\nv 5 5 5\nv 1 -1 0\nv 1 \\\n 1 0\nv -1 1 0\nf 1 2 4\nf 2 3 4\n";
+    let (code, said, err) = check_model(&tmp, "path.obj", obj);
+    assert_eq!(code, Some(0), "{said}{err}");
+    assert!(!said.contains("degenerate"), "{said}");
+}
+
+/// A binary PLY grid of `side`×`side` vertices (2·(side−1)² triangles).
+fn ply_grid(path: &Path, side: u32) {
+    let quads = (side - 1) * (side - 1);
+    let mut bytes = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        side * side,
+        2 * quads
+    )
+    .into_bytes();
+    for y in 0..side {
+        for x in 0..side {
+            let at = |i: u32| 2.0 * i as f32 / (side - 1) as f32 - 1.0;
+            for c in [at(x), at(y), 0.0] {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+    for y in 0..side - 1 {
+        for x in 0..side - 1 {
+            let i = y * side + x;
+            for t in [[i, i + 1, i + side], [i + 1, i + side + 1, i + side]] {
+                bytes.push(3);
+                t.iter()
+                    .for_each(|v| bytes.extend_from_slice(&v.to_le_bytes()));
+            }
+        }
+    }
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// `check` of a 2M-triangle grid under `prlimit --as=500000000` loaded it and then aborted
+/// (exit 134, "memory allocation of 207584208 bytes failed"): its cost probe builds the
+/// hierarchy and the f64 copy of the triangles, which no check counted, and the copy was
+/// gathered in pieces and then copied, holding it twice. The hierarchies and copies are now
+/// admitted before the probe, beside the probe's threads' arenas: raising the limit, each run
+/// is refused with the figures (exit 1) until one measures the job, never an abort.
+#[test]
+fn a_model_whose_hierarchy_cannot_fit_is_refused_before_the_probe() {
+    if !have_tool("prlimit") {
+        return;
+    }
+    let tmp = scratch("hierarchy-memory");
+    ply_grid(&tmp.join("grid.ply"), 708);
+    std::fs::write(tmp.join("seq.yaml"), placing("grid.ply", "")).unwrap();
+    let mut refused_before_probe = false;
+    for mb in (200..=2000).step_by(50) {
+        let out = sh(
+            &tmp,
+            &format!("prlimit --as={mb}000000 \"$RAYREEL\" check seq.yaml"),
+        );
+        let err = stderr(&out);
+        assert!(
+            !err.contains("memory allocation") && !err.contains("panicked"),
+            "{mb} MB: {err}"
+        );
+        match out.status.code() {
+            Some(0) => {
+                assert!(
+                    refused_before_probe,
+                    "{mb} MB: never refused before the probe"
+                );
+                return;
+            }
+            Some(1) => assert!(err.contains("not enough memory for "), "{mb} MB: {err}"),
+            code => panic!("{mb} MB: exit {code:?}: {err}"),
+        }
+        refused_before_probe |= err.contains(
+            "not enough memory for the meshes' hierarchies and triangle copies (999698 triangles): they need about 160.0 MB",
+        );
+    }
+    panic!("no limit up to 2 GB let check measure the job");
 }

@@ -121,7 +121,8 @@ fn unwrap([rx, ry, rz]: [f64; 3], before: Option<[f64; 3]>) -> [f64; 3] {
 /// Euler angles (rx, ry, rz) in degrees with Ry(ry)·Rx(rx)·Rz(rz) = [right, up, −forward]:
 /// rx = asin(forward.y) (tilt), ry = atan2(−forward.x, −forward.z) (pan), and rz (roll) from
 /// where `up` lies in the plane the pan and tilt leave it. Looking straight up or down
-/// (forward.x and forward.z both zero), the pan is 0 and the roll takes the rest.
+/// (forward.x and forward.z both zero), the pan is 0 and the roll takes the rest. Pan and
+/// roll are in (−180, 180]: a half turn is 180, never −180.
 pub(crate) fn zxy_degrees(forward: DVec3, up: DVec3) -> [f64; 3] {
     let rx = libm::asin(forward.y.clamp(-1.0, 1.0));
     // atan2(±0, ±0) is 0 or ±π by the zeros' signs: straight up or down, the pan is 0.
@@ -134,7 +135,11 @@ pub(crate) fn zxy_degrees(forward: DVec3, up: DVec3) -> [f64; 3] {
     let x_axis = DVec3::new(cy, 0.0, -sy);
     let y_axis = DVec3::new(sx * sy, cx, sx * cy);
     let rz = libm::atan2(-up.dot(x_axis), up.dot(y_axis));
-    [rx, ry, rz].map(f64::to_degrees)
+    // atan2 gives −π for a −0 first argument (a camera on −z looking at the origin, up −y):
+    // the documented range is (−180, 180], so a half turn reads 180.
+    [rx, ry, rz]
+        .map(f64::to_degrees)
+        .map(|d| if d <= -180.0 { d + 360.0 } else { d })
 }
 
 #[cfg(test)]
@@ -193,6 +198,12 @@ mod tests {
             let [_, ry, _] = zxy_degrees(look, up);
             assert_eq!(ry, 0.0);
         }
+        // Half turns read 180: pan from (0, 0, −5) to the origin, roll with up −y, and
+        // straight down with up +z.
+        let [_, ry, rz] = zxy_degrees(DVec3::new(0.0, 0.0, 1.0), DVec3::NEG_Y);
+        assert_eq!((ry, rz), (180.0, 180.0));
+        let [_, ry, rz] = zxy_degrees(DVec3::new(-0.0, -1.0, -0.0), DVec3::Z);
+        assert_eq!((ry, rz), (0.0, 180.0));
         assert_eq!(
             unwrap([1.0, -172.5, 10.0], Some([0.0, 180.0, 0.0])),
             [1.0, 187.5, 10.0]

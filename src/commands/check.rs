@@ -40,7 +40,7 @@ pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
         cores,
         format.as_ref(),
         &format!("\n{INDENT}"),
-    );
+    )?;
     for w in warning.into_iter().chain(super::grain::warning(&seq)) {
         eprintln!("{w}");
     }
@@ -100,11 +100,14 @@ pub(crate) fn cost(
     threads: usize,
     format: Option<&FileFormat>,
     join: &str,
-) -> (String, Option<String>) {
+) -> Result<(String, Option<String>), Error> {
     let n = frames.len();
     if n == 0 {
-        return ("nothing to render".into(), None);
+        return Ok(("nothing to render".into(), None));
     }
+    // The probe builds the meshes' hierarchies and triangle copies, as a run would: refused
+    // here with the figures when they cannot fit, where the allocation once aborted (exit 134).
+    crate::schedule::memory::admit_hierarchies(&seq.scene, threads).map_err(Error::Failed)?;
     let rays = rays_per_frame(seq) * n as f64;
     let bound = format!(
         "at most {rays:.2e} rays (an upper bound: pixels × samples × (1 + {}) × {})",
@@ -119,7 +122,7 @@ pub(crate) fn cost(
     );
     let frames_text = super::render::plural(n, "frame");
     let Some(e) = estimate::estimate(seq, frames, threads, format) else {
-        return (format!("{frames_text}: {bound}"), None);
+        return Ok((format!("{frames_text}: {bound}"), None));
     };
     let about = match e.lower_bound {
         true => format!("at least {}", estimate::duration(e.seconds)),
@@ -132,7 +135,7 @@ pub(crate) fn cost(
             e.basis
         )
     });
-    (line, warning)
+    Ok((line, warning))
 }
 
 /// The one-screen description `rayreel check` prints (everything with `--full`); an error

@@ -21,11 +21,12 @@ use crate::budget::{self, Free, size};
 use crate::output::{ExrPrecision, FileFormat};
 use crate::settings::Settings;
 
-/// Address space a thread may reserve beyond the frames: glibc's malloc arena (64 MiB on 64-bit,
-/// mapped as 128 MiB while it is aligned) and its stack. Measured under `prlimit --as`: with
-/// less kept for each worker and the 4 other threads a run has (main, stream, signals,
-/// progress), a run whose frames fit still failed an allocation as it finished.
-const PER_THREAD: u64 = 136 << 20;
+/// Address space a thread's malloc arena reserves (glibc, 64-bit: HEAP_MAX_SIZE, 64 MiB; mapped
+/// as twice that for a moment while it is aligned, which `reserved` keeps once). Threads'
+/// stacks are not counted: the workers are started before the check, so theirs are in the
+/// address space the budget reads already, as is the main thread's arena.
+const ARENA: u64 = 64 << 20;
+/// The threads a run has besides its workers (main, stream, signals, progress).
 const OTHER_THREADS: u64 = 4;
 /// Room kept for everything else: buffers of rows in flight, the encoders' own.
 const SLACK: u64 = 128 << 20;
@@ -63,9 +64,21 @@ pub(crate) fn available(threads: usize) -> Option<Free> {
     })
 }
 
-/// The address space the run's threads reserve beyond the frames.
+/// The address space the run's threads' arenas reserve beyond the frames: glibc makes at most
+/// 8 arenas a core (M_ARENA_MAX's default on 64-bit, cores as online CPUs), the main thread's
+/// among them, and threads beyond share them. It once kept 136 MiB for each thread, stacks
+/// counted twice and arenas beyond glibc's cap: a 32×24 frame whose process peaks at 144 MB
+/// (VmPeak, --threads 1) was refused under 800 MB, one peaking at 1.12 GB with 32 threads
+/// on 2 cores under 4 GB.
 fn reserved(threads: usize) -> u64 {
-    PER_THREAD * (threads as u64 + OTHER_THREADS)
+    arenas(threads as u64 + OTHER_THREADS)
+}
+
+/// The address space the arenas of `threads` threads besides the main one may add.
+fn arenas(threads: u64) -> u64 {
+    // SAFETY: sysconf reads a system value and has no preconditions.
+    let online = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) }.max(1) as u64;
+    ARENA * (threads.min(8 * online - 1) + 1)
 }
 
 /// How many of `window` frames fit in `available` bytes beside `fixed` bytes the run needs
@@ -89,14 +102,7 @@ pub(crate) fn fit(
         0 => String::new(),
         n => format!(" beside {} for the meshes' hierarchies", size(n)),
     };
-    let kept = match free.limit.starts_with("RLIMIT_AS") {
-        true => format!(
-            ", once {} of address space is kept for {} threads' stacks and allocator arenas",
-            size(reserved(threads)),
-            threads as u64 + OTHER_THREADS
-        ),
-        false => String::new(),
-    };
+    let kept = kept(&free, reserved(threads), threads as u64 + OTHER_THREADS);
     Err(format!(
         "one frame needs about {} (rendered, then encoded){hierarchies}, and only {} is free under {} of {}{kept}; render a smaller size (--size), fewer channels, or raise the limit",
         size(per_frame),
@@ -104,6 +110,17 @@ pub(crate) fn fit(
         free.limit,
         size(free.of),
     ))
+}
+
+/// `, once … is kept for N threads' allocator arenas` under RLIMIT_AS, where it is.
+fn kept(free: &Free, reserved: u64, threads: u64) -> String {
+    match free.limit.starts_with("RLIMIT_AS") {
+        true => format!(
+            ", once {} of address space is kept for {threads} threads' allocator arenas",
+            size(reserved)
+        ),
+        false => String::new(),
+    }
 }
 
 /// The bytes the hierarchies of the scene's meshes will take once built (the run builds them
@@ -114,6 +131,29 @@ pub(crate) fn hierarchies(scene: &crate::scene::Scene) -> u64 {
         .iter()
         .map(|m| budget::hierarchy_bytes(m.triangles.len() as u64))
         .sum()
+}
+
+/// `Ok` when the meshes' hierarchies (`hierarchies`) fit in what the process may take now,
+/// otherwise the figures: `check` and `render --dry-run` build them for their probe, which
+/// runs on `threads` workers.
+pub(crate) fn admit_hierarchies(scene: &crate::scene::Scene, threads: usize) -> Result<(), String> {
+    let need = hierarchies(scene);
+    // Only the probe's workers: no stream, signal or progress thread, no rows in flight.
+    let reserved = arenas(threads as u64);
+    match budget::free(reserved) {
+        Some(free) if need > free.bytes => {
+            let triangles: usize = scene.meshes.iter().map(|m| m.triangles.len()).sum();
+            Err(format!(
+                "not enough memory for the meshes' hierarchies and triangle copies ({triangles} triangles): they need about {}, and only {} is free under {} of {}{}",
+                size(need),
+                size(free.bytes),
+                free.limit,
+                size(free.of),
+                kept(&free, reserved, threads as u64)
+            ))
+        }
+        _ => Ok(()),
+    }
 }
 
 #[cfg(test)]

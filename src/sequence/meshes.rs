@@ -193,7 +193,14 @@ fn placement(path: &str, m: &raw::Mesh, k: i32, mesh: &Mesh) -> Check<Placement>
         libm::scalbn(given.y, k),
         libm::scalbn(given.z, k),
     );
-    if scale.abs().min_element() < MIN_SCALE {
+    // With `fit` the scale only sets proportions: the size that must hold is the fitted one,
+    // judged below, so a model in 1e-150 units with `scale: 1, fit: 1.5` is 1.5 across.
+    // Only a scale whose factors are no longer normal f64 numbers is refused before fitting.
+    let least = match m.fit {
+        None => MIN_SCALE,
+        Some(_) => f64::MIN_POSITIVE,
+    };
+    if scale.abs().min_element() < least {
         return invalid(&field, too_small(mesh, k, given));
     }
     // Any finite angle: `sin_cos` reduces it exactly.

@@ -82,7 +82,7 @@ fn statements<R: BufRead>(input: &mut Input<R>, bom: bool) -> Result<Soup, Fail>
     let mut statement: Vec<u8> = Vec::new();
     let mut first = bom;
     loop {
-        // A statement: one line, or several joined where a line ends in `\`.
+        // A statement: one line, or several joined where a line without a comment ends in `\`.
         statement.clear();
         let mut at = 0;
         let mut more = true;
@@ -97,7 +97,8 @@ fn statements<R: BufRead>(input: &mut Input<R>, bom: bool) -> Result<Soup, Fail>
             if at == 0 {
                 at = number;
             }
-            more = line.last() == Some(&b'\\');
+            // A comment ends its line: `# exported to C:\models\` does not swallow the next.
+            more = line.last() == Some(&b'\\') && !line.contains(&b'#');
             let line = if more { &line[..line.len() - 1] } else { line };
             budget::grow(&mut statement, line.len() + 1, || {
                 format!("line {at} of the file")
