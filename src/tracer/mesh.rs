@@ -9,6 +9,7 @@
 //! hierarchy happens to visit triangles in, and every lane width finds the same hit.
 
 use super::accel::walk::{Visit, walk};
+use super::accel::wide::Tree;
 use super::accel::{Rays, Slabs};
 use super::bvh::{Bvh, Tri, Tri32};
 use super::triangle::{barycentrics, triangle_hit};
@@ -125,26 +126,9 @@ impl Instance {
         let object = self.object;
         let tree = &self.bvh.tree;
         // The triangles in the lanes' precision.
-        if single::<V>() {
-            let (rays, tris) = (&local, self.bvh.tris32());
-            let mut visit = NearestVisit {
-                rays,
-                from,
-                tris,
-                object,
-                best,
-            };
-            walk(tree, &local, active, &mut visit);
-        } else {
-            let (rays, tris) = (&local, self.bvh.tris());
-            let mut visit = NearestVisit {
-                rays,
-                from,
-                tris,
-                object,
-                best,
-            };
-            walk(tree, &local, active, &mut visit);
+        match single::<V>() {
+            true => nearest_in(tree, &local, from, self.bvh.tris32(), object, active, best),
+            false => nearest_in(tree, &local, from, self.bvh.tris(), object, active, best),
         }
     }
 
@@ -153,32 +137,54 @@ impl Instance {
     pub fn blocked<V: Lanes>(&self, rays: &Rays<V>, max_t: V, open: V::M) -> V::M {
         let local = self.local(rays);
         let from = self.start(&local);
-        let blocked = V::M::none_set();
         let tree = &self.bvh.tree;
-        if single::<V>() {
-            let (rays, tris) = (&local, self.bvh.tris32());
-            let mut visit = AnyVisit {
-                rays,
-                from,
-                tris,
-                max_t,
-                blocked,
-            };
-            walk(tree, &local, open, &mut visit);
-            visit.blocked
-        } else {
-            let (rays, tris) = (&local, self.bvh.tris());
-            let mut visit = AnyVisit {
-                rays,
-                from,
-                tris,
-                max_t,
-                blocked,
-            };
-            walk(tree, &local, open, &mut visit);
-            visit.blocked
+        match single::<V>() {
+            true => blocked_in(tree, &local, from, self.bvh.tris32(), max_t, open),
+            false => blocked_in(tree, &local, from, self.bvh.tris(), max_t, open),
         }
     }
+}
+
+/// `Instance::nearest` in the tree, with the triangles `tris` of one precision.
+#[inline(always)]
+fn nearest_in<V: Lanes, T: Stored>(
+    tree: &Tree,
+    rays: &Rays<V>,
+    from: (V3<V>, Option<V>),
+    tris: &[T],
+    object: u32,
+    active: V::M,
+    best: &mut Best<V>,
+) {
+    let mut visit = NearestVisit {
+        rays,
+        from,
+        tris,
+        object,
+        best,
+    };
+    walk(tree, rays, active, &mut visit);
+}
+
+/// `Instance::blocked` in the tree, with the triangles `tris` of one precision.
+#[inline(always)]
+fn blocked_in<V: Lanes, T: Stored>(
+    tree: &Tree,
+    rays: &Rays<V>,
+    from: (V3<V>, Option<V>),
+    tris: &[T],
+    max_t: V,
+    open: V::M,
+) -> V::M {
+    let mut visit = AnyVisit {
+        rays,
+        from,
+        tris,
+        max_t,
+        blocked: V::M::none_set(),
+    };
+    walk(tree, rays, open, &mut visit);
+    visit.blocked
 }
 
 /// A stored triangle, in either precision: its vertices and normal as lanes, and its index.
