@@ -6,7 +6,7 @@
 mod common;
 
 use common::*;
-use rayreel::timeline::motion::Field;
+use rayreel::timeline::motion::Thing;
 use std::path::Path;
 
 /// A scene where a mesh turns and moves, a sphere travels and grows, a plane tilts, and a
@@ -70,33 +70,15 @@ fn ok(dir: &Path, args: &[&str]) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
-/// The YAML name of a keyed field (the spot's two angles are written apart).
-fn yaml_fields(field: Field, v: [f64; 3]) -> String {
-    let vec = |name: &str| format!("{name}: [{}, {}, {}]", v[0], v[1], v[2]);
-    match field {
-        Field::Scale => vec("scale"),
-        Field::Rotate => vec("rotate"),
-        Field::Translate => vec("translate"),
-        Field::Center => vec("center"),
-        Field::Radius => format!("radius: {}", v[0]),
-        Field::Point => vec("point"),
-        Field::Normal => vec("normal"),
-        Field::Position => vec("position"),
-        Field::Direction => vec("direction"),
-        Field::Angles => format!("inner_angle: {}, outer_angle: {}", v[0], v[1]),
-        Field::Ambient => vec("ambient"),
-        Field::Diffuse => vec("diffuse"),
-        Field::Specular => vec("specular"),
-        Field::Color => vec("color"),
-        Field::Corner => vec("corner"),
-    }
-}
-
 /// `yaml` with every `keys:` block removed and each keyed thing's fields replaced by their
-/// values at time t, printed in full (Rust prints the shortest decimal that reads back as
-/// the same f64).
-fn still_at(yaml: &str, seq: &rayreel::sequence::Sequence, t: f64) -> String {
-    let mut poses = seq.timeline.motion.iter().map(|rig| rig.values_at(t));
+/// values at frame n, as `rayreel camera --object I | --light I --format json` prints them
+/// (the shortest decimal that reads back as the same f64).
+fn still_at(yaml: &str, seq: &rayreel::sequence::Sequence, dir: &Path, n: u64) -> String {
+    let mut poses = seq
+        .timeline
+        .motion
+        .iter()
+        .map(|rig| exported(dir, rig.thing, n));
     let lines: Vec<&str> = yaml
         .lines()
         .filter(|l| !l.trim_start().starts_with("interpolation:"))
@@ -112,12 +94,7 @@ fn still_at(yaml: &str, seq: &rayreel::sequence::Sequence, t: f64) -> String {
             out += "\n";
             continue;
         }
-        let mut fields: Vec<String> = poses
-            .next()
-            .unwrap()
-            .iter()
-            .map(|(f, v)| yaml_fields(*f, v.to_array()))
-            .collect();
+        let mut fields = poses.next().unwrap();
         out += &replace_fields(line, &mut fields);
         out += "\n";
         i += 1;
@@ -162,6 +139,22 @@ fn replace_fields(line: &str, fields: &mut Vec<String>) -> String {
     format!("{}{}{}", &line[..open], parts.join(", "), &line[close..])
 }
 
+/// The fields `camera --format json` prints for one moving thing at frame n, as YAML.
+fn exported(dir: &Path, thing: Thing, n: u64) -> Vec<String> {
+    let (flag, i) = match thing {
+        Thing::Object(i) => ("--object", i),
+        Thing::Light(i) => ("--light", i),
+    };
+    let (i, n) = (i.to_string(), n.to_string());
+    let args = ["camera", "seq.yaml", flag, &i, "--format", "json"];
+    let line = ok(dir, &[&args[..], &["--frames", &n]].concat());
+    let json: serde_json::Map<String, serde_json::Value> = serde_json::from_str(&line).unwrap();
+    json.iter()
+        .filter(|(k, _)| !["frame", "time"].contains(&k.as_str()))
+        .map(|(k, v)| format!("{k}: {v}"))
+        .collect()
+}
+
 #[test]
 fn a_frame_is_the_still_scene_that_writes_its_poses() {
     let yaml = animated("");
@@ -172,8 +165,7 @@ fn a_frame_is_the_still_scene_that_writes_its_poses() {
         "the film ends on the last key"
     );
     for n in [0u64, 7, 17, 24] {
-        let t = seq.timeline.time_of(n);
-        let still = still_at(&yaml, &seq, t);
+        let still = still_at(&yaml, &seq, &tmp, n);
         assert!(!still.contains("keys:"), "{still}");
         let name = format!("still{n}.yaml");
         std::fs::write(tmp.join(&name), &still).unwrap();
@@ -425,4 +417,75 @@ fn check_lists_what_moves_and_over_which_frames() {
     let still = std::fs::read_to_string(repo().join("sequences/talk.yaml")).unwrap();
     std::fs::write(tmp.join("still.yaml"), still).unwrap();
     assert!(!ok(&tmp, &["check", "still.yaml"]).contains("moving:"));
+}
+
+#[test]
+fn camera_exports_the_poses_of_moving_things() {
+    let tmp = setup("motion-export", &animated(""));
+    // The turntable's chan: the placement's ZXY angles, the pan unwrapped to one full turn.
+    let file = repo().join("sequences/turntable.yaml");
+    let file = file.to_str().unwrap();
+    let chan = ok(&tmp, &["camera", file, "--object", "1", "--format", "chan"]);
+    let rows: Vec<Vec<f64>> = chan
+        .lines()
+        .map(|l| l.split(' ').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 97, "{chan}");
+    for (n, row) in rows.iter().enumerate() {
+        assert_eq!(row[..4], [n as f64, 0.0, 0.05, 0.0], "{chan}");
+        assert!((row[5] - 3.75 * n as f64).abs() < 1e-9, "{chan}");
+        assert_eq!((row[4], row[6]), (0.0, 0.0), "{chan}");
+    }
+    // A spot light looks along its direction; csv names every keyed column.
+    let spot = ok(
+        &tmp,
+        &["camera", "seq.yaml", "--light", "1", "--format", "chan"],
+    );
+    let first: Vec<f64> = spot
+        .lines()
+        .next()
+        .unwrap()
+        .split(' ')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let tilt = (-1.0f64 / 1.25f64.sqrt()).asin().to_degrees();
+    assert!((first[4] - tilt).abs() < 1e-9 && first[5] == 0.0, "{spot}");
+    let csv = ok(
+        &tmp,
+        &["camera", "seq.yaml", "--light", "1", "--frames", "0"],
+    );
+    assert!(
+        csv.starts_with("frame,time,direction_x,direction_y,direction_z,inner_angle,outer_angle\n"),
+        "{csv}"
+    );
+    // What cannot be exported says why, naming the thing; exit 2.
+    let still = animated("").replace("    keys:\n      - { time: 0 }\n      - { time: 1, normal: [0.1, 1, 0.05], point: [0, -0.1, 0] }\n", "");
+    std::fs::write(tmp.join("still.yaml"), still).unwrap();
+    for (args, says) in [
+        (
+            &["camera", "still.yaml", "--object", "0"][..],
+            "objects[0] has no keys",
+        ),
+        (
+            &["camera", "seq.yaml", "--object", "wheel"],
+            "no object is named `wheel`",
+        ),
+        (
+            &["camera", "seq.yaml", "--object", "3"],
+            "the sequence has 3 objects",
+        ),
+        (
+            &["camera", "seq.yaml", "--light", "3"],
+            "the sequence has 3 lights",
+        ),
+        (
+            &["camera", "seq.yaml", "--object", "0", "--format", "chan"],
+            "objects[0] is a plane",
+        ),
+    ] {
+        let out = run_in(&tmp, args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&out).contains(says), "{args:?}: {}", stderr(&out));
+        assert!(out.stdout.is_empty(), "{args:?}");
+    }
 }

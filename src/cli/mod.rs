@@ -87,12 +87,19 @@ pub struct CameraArgs {
     /// separated by `:`).
     #[arg(long, value_name = "DIR")]
     pub(crate) assets: Vec<PathBuf>,
-    /// `csv` (a header line, then one line per frame) or `json` (one object per line).
+    /// `csv` (a header line, then one line per frame), `json` (one object per line) or `chan`.
     #[arg(long, value_enum, default_value_t = CameraFormat::Csv)]
     pub(crate) format: CameraFormat,
     /// Frames to print, e.g. 0-23 (default: all).
     #[arg(long, value_name = "SPEC", value_parser = parse_frame_spec)]
     pub(crate) frames: Option<FrameSpec>,
+    /// Print this moving object's poses instead of the camera: its index in `objects:` (from
+    /// 0, as `check` lists it) or its `name:`.
+    #[arg(long, value_name = "INDEX|NAME", conflicts_with = "light")]
+    pub(crate) object: Option<String>,
+    /// Print this moving light's poses instead of the camera: its index in `lights:` (from 0).
+    #[arg(long, value_name = "INDEX")]
+    pub(crate) light: Option<usize>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]

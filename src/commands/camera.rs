@@ -1,11 +1,12 @@
-//! `rayreel camera FILE [--format csv|json|chan] [--frames SPEC]`: every frame's camera on
-//! stdout, for compositing tools and for checking a path by numbers. Numbers are printed in
+//! `rayreel camera FILE [--format csv|json|chan] [--frames SPEC]`: every frame's camera (or,
+//! with `--object`/`--light`, a moving thing's poses: `poses`) on stdout, for compositing tools and for checking a path by numbers. Numbers are printed in
 //! their shortest form that reads back as the same f64, so a still camera given a printed pose
 //! renders that frame exactly. `chan` is Nuke's channel file (`chan`, below).
 
-use super::{Error, print_warnings};
+use super::{Error, poses, print_warnings};
 use crate::camera::Camera;
 use crate::cli::{CameraArgs, CameraFormat};
+use crate::frameset::FrameSet;
 use crate::sequence::{self, Sequence};
 use glam::DVec3;
 use std::io::Write;
@@ -20,19 +21,15 @@ pub(crate) fn camera(args: CameraArgs) -> Result<(), Error> {
         Some(spec) => spec
             .frames(first, last)
             .map_err(|e| Error::Usage(format!("--frames: {e}")))?,
-        None => crate::frameset::FrameSet::range(first, last, 1),
+        None => FrameSet::range(first, last, 1),
+    };
+    let lines = match poses::find(&seq, args.object.as_deref(), args.light)? {
+        Some(rig) => poses::lines(&seq, rig, &frames, args.format)?,
+        None => camera_lines(&seq, &frames, args.format),
     };
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
-    // chan's angles continue from the line before (see `unwrap`).
-    let mut before = None;
-    let mut lines = frames.iter().map(|n| match args.format {
-        CameraFormat::Chan => chan_line(&seq, n, &mut before),
-        format => line(&seq, n, format),
-    });
-    let header = (args.format == CameraFormat::Csv).then(|| CSV_HEADER.to_string());
-    let written = header
-        .into_iter()
-        .chain(&mut lines)
+    let written = lines
+        .iter()
         .try_for_each(|l| writeln!(out, "{l}"))
         .and_then(|()| out.flush());
     match written {
@@ -41,6 +38,18 @@ pub(crate) fn camera(args: CameraArgs) -> Result<(), Error> {
         Err(e) => Err(Error::Failed(format!("stdout: {e}"))),
         Ok(()) => Ok(()),
     }
+}
+
+/// The camera's lines over `frames` (a CSV header first).
+fn camera_lines(seq: &Sequence, frames: &FrameSet, format: CameraFormat) -> Vec<String> {
+    // chan's angles continue from the line before (see `unwrap`).
+    let mut before = None;
+    let header = (format == CameraFormat::Csv).then(|| CSV_HEADER.to_string());
+    let lines = frames.iter().map(|n| match format {
+        CameraFormat::Chan => chan_line(seq, n, &mut before),
+        format => line(seq, n, format),
+    });
+    header.into_iter().chain(lines).collect()
 }
 
 /// Frame n as one CSV or JSON line.
@@ -110,7 +119,7 @@ fn chan_line(seq: &Sequence, n: u64, before: &mut Option<[f64; 3]>) -> String {
 /// Nuke's and Blender's exporters do, so that importers interpolating between frames turn the
 /// short way (an orbit's pan goes 172.5, 180, 187.5, not 172.5, 180, −172.5). The tilt, in
 /// [−90, 90], never wraps. The first line's angles are as `zxy_degrees` gives them.
-fn unwrap([rx, ry, rz]: [f64; 3], before: Option<[f64; 3]>) -> [f64; 3] {
+pub(super) fn unwrap([rx, ry, rz]: [f64; 3], before: Option<[f64; 3]>) -> [f64; 3] {
     let Some([_, py, pz]) = before else {
         return [rx, ry, rz];
     };

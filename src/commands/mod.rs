@@ -5,6 +5,7 @@ mod check;
 mod estimate;
 mod grain;
 mod meshes;
+mod poses;
 mod render;
 mod screen;
 mod tools;
