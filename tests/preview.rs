@@ -300,3 +300,47 @@ fn a_path_that_fails_validation_is_still_drawn_with_the_reason() {
         "a no-camera tile"
     );
 }
+
+#[test]
+fn moving_things_are_drawn_along_their_paths() {
+    // The turntable: the ball rolls from x = -1.6 to 1.6 at z = 0.7 (teal), the spot sweeps
+    // from (2, 2.5, 2) to (-2, 2.5, 2) (amber), the blob turns on its spot (a teal ring).
+    let seq = load(&repo().join("sequences/turntable.yaml"));
+    let (img, _) = preview::path_plot(&seq, None);
+    let [top, _] = preview::panels(&seq);
+    let near = |colour, at: glam::DVec3, px: f64| {
+        let (cx, cy) = top.to_px(at);
+        let mut hits = 0;
+        for y in top.y..top.y + top.height {
+            for x in top.x..top.x + top.width {
+                let d = (f64::from(x) + 0.5 - cx).hypot(f64::from(y) + 0.5 - cy);
+                hits += usize::from(d <= px && *img.get_pixel(x, y) == colour);
+            }
+        }
+        hits
+    };
+    for x in [-1.2, -0.4, 0.4, 1.2] {
+        let on = glam::DVec3::new(x, -0.25, 0.7);
+        assert!(
+            near(preview::OBJECT_PATH, on, 3.0) > 0,
+            "the ball's path at x = {x}"
+        );
+    }
+    for x in [-1.5, 0.0, 1.5] {
+        // The spot's path is a curve through (0, 2.8, 2.4): from above, at z in [2, 2.4].
+        let (col, top_row) = top.to_px(glam::DVec3::new(x, 2.5, 1.95));
+        let (_, bottom_row) = top.to_px(glam::DVec3::new(x, 2.5, 2.45));
+        let col = col as u32;
+        let hits = (top_row as u32..bottom_row as u32)
+            .flat_map(|y| (col - 2..=col + 2).map(move |x| (x, y)))
+            .filter(|&(x, y)| *img.get_pixel(x, y) == preview::LIGHT_PATH)
+            .count();
+        assert!(hits > 0, "the spot's path at x = {x}");
+    }
+    assert!(near(preview::OBJECT_PATH, glam::DVec3::new(0.0, 0.05, 0.0), 8.0) > 0);
+    // A scene where nothing moves has no such colours.
+    let still = load(&repo().join("sequences/orbit.yaml"));
+    let (img, _) = preview::path_plot(&still, None);
+    let moving = |p: &image::Rgb<u8>| *p == preview::OBJECT_PATH || *p == preview::LIGHT_PATH;
+    assert!(!img.pixels().any(moving));
+}

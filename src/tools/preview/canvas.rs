@@ -159,6 +159,19 @@ impl<'a> Canvas<'a> {
         }
     }
 
+    /// A circle of radius r, w pixels wide.
+    pub(super) fn ring(&mut self, (cx, cy): (f64, f64), r: f64, w: f64, c: Rgb<u8>) {
+        let bbox = Rect::around((cx, cy), r + w + 1.0).intersect(&self.clip);
+        for y in bbox.y0..bbox.y1 {
+            for x in bbox.x0..bbox.x1 {
+                let d = (x as f64 + 0.5 - cx).hypot(y as f64 + 0.5 - cy);
+                if (d - r).abs() <= w / 2.0 {
+                    self.put(x, y, c);
+                }
+            }
+        }
+    }
+
     pub(super) fn square(&mut self, (x, y): (f64, f64), half: f64, c: Rgb<u8>) {
         self.stamp((x, y), 2.0 * half, c);
     }

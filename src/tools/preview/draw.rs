@@ -9,6 +9,7 @@ pub(super) fn draw_panel(img: &mut RgbImage, p: &Panel, seq: &Sequence, plot: &P
     draw_grid(&mut c, p);
     draw_spheres(&mut c, p, seq, plot);
     draw_target_links(&mut c, p, plot);
+    draw_moving(&mut c, p, plot);
     draw_path(&mut c, p, plot);
     draw_ticks(&mut c, p, plot);
     draw_targets(&mut c, p, plot);
@@ -146,6 +147,36 @@ pub(super) fn draw_path(c: &mut Canvas, p: &Panel, plot: &Plot) {
     for (i, &pt) in pts.iter().enumerate().step_by(every) {
         let colour = if plot.bad[i] { BAD } else { PATH };
         c.disc(pt, 2.5, colour);
+    }
+}
+
+/// Each moving object's (teal) and light's (amber) path, with dots spaced like the camera's
+/// and its label (`[i]`, `L<i>`) at the end it reaches last. A path that stays on one spot
+/// (a turntable, a light that only dims) is a ring there.
+pub(super) fn draw_moving(c: &mut Canvas, p: &Panel, plot: &Plot) {
+    for (thing, path) in &plot.moving {
+        let (colour, label) = match thing {
+            Thing::Object(i) => (OBJECT_PATH, format!("[{i}]")),
+            Thing::Light(i) => (LIGHT_PATH, format!("L{i}")),
+        };
+        let pts: Vec<(f64, f64)> = path.iter().map(|&x| p.to_px(x)).collect();
+        c.polyline(pts.iter().copied(), 1.5, colour);
+        for &pt in pts.iter().step_by(dot_stride(&pts)) {
+            c.disc(pt, 1.8, colour);
+        }
+        let end = pts[pts.len() - 1];
+        if pts.iter().all(|&q| dist(q, end) < 3.0) {
+            c.ring(end, 6.0, 1.5, colour);
+        }
+        if edge_point(p, end).is_none() {
+            c.text(
+                (end.0 + 7.0) as i64,
+                (end.1 + 4.0) as i64,
+                &label,
+                1,
+                colour,
+            );
+        }
     }
 }
 

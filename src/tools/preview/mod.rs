@@ -6,7 +6,8 @@
 //!   everything, so they are drawn as the solid region they cut from the panel's slice plane,
 //!   which passes through the camera path's mean height (top) or mean x (side). On top: the
 //!   camera at every frame (a polyline, with dots when they are far enough apart to show
-//!   speed), numbered keyframes, look-at targets, view-direction ticks, start, end and lights.
+//!   speed), numbered keyframes, look-at targets, view-direction ticks, start, end and lights,
+//!   and the paths of objects and lights that move.
 //!   Frames where the camera is inside a sphere, behind a plane or rolling over are red and
 //!   come back as warnings.
 //! * The **contact sheet** renders a few frames small at draft depth, `columns = ceil(sqrt(N))`
@@ -38,12 +39,13 @@ pub use crate::frameset::evenly_spaced;
 pub use panel::{Panel, panels};
 pub use path_plot::path_plot;
 pub use sheet::{SheetLayout, TileOrigin, contact_sheet};
-pub use style::{BAD, PATH};
+pub use style::{BAD, LIGHT_PATH, OBJECT_PATH, PATH};
 
 use crate::camera::{Camera, Pose};
 use crate::scene::{Material, Shape};
 use crate::schedule::render_with;
 use crate::sequence::Sequence;
+use crate::timeline::motion::{Posed, Thing};
 use crate::timeline::{Path as TimelinePath, Timeline};
 use crate::tracer::World;
 use glam::DVec3;

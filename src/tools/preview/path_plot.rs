@@ -28,7 +28,10 @@ pub fn path_plot(seq: &Sequence, invalid: Option<&str>) -> (RgbImage, Vec<String
         let more = plot.warnings.len() - MAX_WARNING_LINES;
         lines.push(format!("... and {more} more warnings (on stderr)"));
     }
-    let notes_y = legend_y + 2 * LEGEND_ROW + 8;
+    // A third legend row for moving things, only when something moves: a still scene's plot
+    // keeps its bytes.
+    let rows = if plot.moving.is_empty() { 2 } else { 3 };
+    let notes_y = legend_y + rows * LEGEND_ROW + 8;
     let height = notes_y + lines.len() as u32 * WARNING_ROW + MARGIN;
     let mut img = RgbImage::from_pixel(width, height, BACKGROUND);
     title(&mut img, seq);
@@ -41,7 +44,7 @@ pub fn path_plot(seq: &Sequence, invalid: Option<&str>) -> (RgbImage, Vec<String
     c.text(i64::from(MARGIN), speed_rect.y0 - 22, what, 2, INK);
     let mut c = Canvas::new(&mut img, speed_rect);
     speed::draw(&mut c, speed_rect, seq, &plot.samples, &plot.bad);
-    legend(&mut img, legend_y);
+    legend(&mut img, legend_y, rows == 3);
     red_lines(&mut img, &lines, notes_y);
     (img, plot.warnings)
 }
@@ -95,10 +98,10 @@ pub(super) fn caption(img: &mut RgbImage, p: &Panel) {
 
 pub(super) const LEGEND_MIN_W: u32 = 1000;
 
-pub(super) fn legend(img: &mut RgbImage, y: u32) {
+pub(super) fn legend(img: &mut RgbImage, y: u32, moving: bool) {
     let mut c = Canvas::whole(img);
     let y = i64::from(y);
-    let rows: [&[(&str, Marker)]; 2] = [
+    let rows: [&[(&str, Marker)]; 3] = [
         &[
             ("camera path", Marker::Line(PATH)),
             ("inside an object / no camera", Marker::Line(BAD)),
@@ -112,8 +115,13 @@ pub(super) fn legend(img: &mut RgbImage, y: u32) {
             ("light", Marker::Light),
             ("object [index]", Marker::Object),
         ],
+        &[
+            ("moving object [index]", Marker::Line(OBJECT_PATH)),
+            ("moving light L<index>", Marker::Line(LIGHT_PATH)),
+        ],
     ];
-    for (row, items) in rows.iter().enumerate() {
+    let shown = if moving { 3 } else { 2 };
+    for (row, items) in rows.iter().take(shown).enumerate() {
         let mut x = i64::from(MARGIN);
         let yy = y + row as i64 * i64::from(LEGEND_ROW);
         for (label, marker) in items.iter() {

@@ -17,6 +17,13 @@ pub(super) const HUGE_SPHERE: f64 = 10.0;
 /// at the panel edge with their coordinates instead of being fitted.
 pub(super) const EXTRA_REACH: f64 = 0.5;
 
+/// Points along each moving object's or light's path: enough for a smooth curve, few enough
+/// that a thousand moving things draw in a moment.
+pub(super) const THING_SAMPLES: u64 = 256;
+
+/// Moving things whose paths are drawn (the first in the file); `check` counts the rest.
+pub(super) const MAX_THINGS: usize = 64;
+
 /// View-direction ticks drawn along the path.
 pub(super) const TICKS: u64 = 12;
 
@@ -33,6 +40,9 @@ pub(super) struct Plot {
     pub(super) targets: Vec<DVec3>,
     /// Per object: a sphere too big to draw as a disc.
     pub(super) huge: Vec<bool>,
+    /// Each moving object or light that has a place (`anchor`), and that place at evenly
+    /// spaced frames from first to last.
+    pub(super) moving: Vec<(Thing, Vec<DVec3>)>,
     /// The box the panels are fitted to.
     pub(super) fit: Bounds,
 }
@@ -48,6 +58,7 @@ impl Plot {
         let (bad, warnings) = problems(seq, &samples);
         let (keys, targets) = keys_and_targets(t);
         let huge = huge_spheres(seq, &samples);
+        let moving = moving_paths(seq);
         let mut plot = Plot {
             samples,
             bad,
@@ -55,6 +66,7 @@ impl Plot {
             keys,
             targets,
             huge,
+            moving,
             fit: Bounds::EMPTY,
         };
         plot.fit = fit(seq, &plot);
@@ -79,6 +91,35 @@ pub(super) fn keys_and_targets(t: &Timeline) -> (Vec<(DVec3, DVec3)>, Vec<DVec3>
     }
 }
 
+/// The paths of moving things (the first `MAX_THINGS`), each at `THING_SAMPLES` frames.
+pub(super) fn moving_paths(seq: &Sequence) -> Vec<(Thing, Vec<DVec3>)> {
+    let t = &seq.timeline;
+    let frames = evenly_spaced(t.frame_count, THING_SAMPLES);
+    let rigs = t.motion.iter().take(MAX_THINGS);
+    rigs.filter_map(|rig| {
+        let at = |n: &u64| anchor(seq, rig.at(t.time_of(n + t.first_frame())));
+        let path: Option<Vec<DVec3>> = frames.iter().map(at).collect();
+        path.map(|p| (rig.thing, p))
+    })
+    .collect()
+}
+
+/// Where a thing is: a sphere's centre, a mesh's placed bounds' centre, a plane's point, a
+/// light's position (a rect's corner); None for a directional or ambient light.
+fn anchor(seq: &Sequence, posed: Posed) -> Option<DVec3> {
+    match posed {
+        Posed::Object(o) => Some(match o.shape {
+            Shape::Sphere { center, .. } => center,
+            Shape::Plane { point, .. } => point,
+            Shape::Mesh { mesh, place, .. } => {
+                let (lo, hi) = seq.scene.mesh_bounds(mesh, &place);
+                (lo + hi) * 0.5
+            }
+        }),
+        Posed::Light(l) => l.position(),
+    }
+}
+
 /// Point and spot lights: (index in `lights`, position).
 pub(super) fn positioned_lights(seq: &Sequence) -> Vec<(usize, DVec3)> {
     let lights = seq.scene.lights.iter().enumerate();
@@ -95,6 +136,16 @@ pub(super) fn fit(seq: &Sequence, plot: &Plot) -> Bounds {
     for p in plot.samples.iter().map(|(_, p)| p.position).chain(keys) {
         core.add(p);
     }
+    // Planes' points slide along their plane, anywhere: only spheres' and meshes' paths are
+    // fitted (moving lights are fitted below, as still ones are, when near).
+    for (thing, path) in &plot.moving {
+        if let Thing::Object(i) = thing
+            && !matches!(seq.scene.objects[*i].shape, Shape::Plane { .. })
+        {
+            path.iter().for_each(|&p| core.add(p));
+        }
+    }
+
     for (o, &huge) in seq.scene.objects.iter().zip(&plot.huge) {
         if let (Shape::Sphere { center, radius }, false) = (o.shape, huge) {
             core.add(center - DVec3::splat(radius));
@@ -113,7 +164,13 @@ pub(super) fn fit(seq: &Sequence, plot: &Plot) -> Bounds {
     let near = core.grown(EXTRA_REACH * size);
     let mut all = core;
     let lights = positioned_lights(seq).into_iter().map(|(_, p)| p);
-    for p in plot.targets.iter().copied().chain(lights) {
+    let moving_lights = plot
+        .moving
+        .iter()
+        .filter(|(thing, _)| matches!(thing, Thing::Light(_)))
+        .flat_map(|(_, path)| path.iter().copied());
+    let extra = plot.targets.iter().copied().chain(lights);
+    for p in extra.chain(moving_lights) {
         if near.contains(p) {
             all.add(p);
         }

@@ -38,6 +38,11 @@ pub(super) const END: Rgb<u8> = Rgb([150, 40, 200]);
 
 pub(super) const LIGHT: Rgb<u8> = Rgb([255, 205, 0]);
 
+/// The path of a moving object (teal) or light (amber, darker than the light's own yellow so
+/// it reads on white).
+pub const OBJECT_PATH: Rgb<u8> = Rgb([0, 150, 136]);
+pub const LIGHT_PATH: Rgb<u8> = Rgb([215, 150, 0]);
+
 /// The material's diffuse colour brightened to full and mixed with white: `amount` of colour.
 pub(super) fn tint(m: &Material, amount: f64) -> Rgb<u8> {
     let base = hue(m);
