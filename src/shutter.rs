@@ -70,9 +70,17 @@ pub(crate) struct FrameView {
     pub(crate) time: f64,
     pub(crate) pose: Pose,
     pub(crate) exposure: Result<Exposure, NoCamera>,
-    /// The pinhole camera one frame later, for the motion pass: set only when the settings
-    /// ask for it (`Settings::frame_view`).
-    pub(crate) next: Option<Camera>,
+    /// One frame later, for the motion pass: set only when the settings ask for it
+    /// (`Settings::frame_view`).
+    pub(crate) next: Option<Next>,
+}
+
+/// The frame one later, as the motion pass sees it: the pinhole camera at its time and the
+/// poses there of the objects and lights that move (empty when nothing does).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Next {
+    pub camera: Camera,
+    pub poses: Poses,
 }
 
 impl FrameView {
@@ -93,10 +101,10 @@ impl FrameView {
         }
     }
 
-    /// Frame `n`, and when `next` (the motion pass) the camera at the time of frame n + 1
-    /// (what the timeline gives there, beyond the last frame too: keys hold still after the
-    /// last one, an orbit goes on turning). Should that camera not exist, the frame's own
-    /// stands in (no motion).
+    /// Frame `n`, and when `next` (the motion pass) the camera and the moving things at the
+    /// time of frame n + 1 (what the timeline gives there, beyond the last frame too: keys
+    /// hold still after the last one, an orbit goes on turning). Should that camera not
+    /// exist, the frame's own stands in (no motion).
     pub(crate) fn with_next(
         timeline: &Timeline,
         shutter: Option<Shutter>,
@@ -105,11 +113,14 @@ impl FrameView {
     ) -> FrameView {
         let mut view = FrameView::of_frame(timeline, shutter, n);
         if next && let Ok(e) = &view.exposure {
-            let (pose, _) = timeline.view_at(timeline.time_of(n.saturating_add(1)));
-            view.next = Some(Camera::new(&pose).unwrap_or(Camera {
+            let t = timeline.time_of(n.saturating_add(1));
+            let (pose, _) = timeline.view_at(t);
+            let camera = Camera::new(&pose).unwrap_or(Camera {
                 lens_radius: 0.0,
                 ..e.camera
-            }));
+            });
+            let poses = crate::timeline::motion::poses_at(&timeline.motion, t);
+            view.next = Some(Next { camera, poses });
         }
         view
     }

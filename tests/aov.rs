@@ -423,3 +423,105 @@ fn meshes_and_textures_give_their_own_normals_and_colours() {
         .fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
     assert!(hi - lo > 0.5, "albedo.R from {lo} to {hi}");
 }
+
+#[test]
+fn motion_carries_moving_objects_with_them() {
+    // A still camera at (0, 1, 5), fov 90 (32.5 pixels per unit of x/z): a sphere sliding
+    // 0.1 a frame to the right, a blob turning 5° a frame about its vertical axis, and a
+    // still floor. Each pixel's point P (the position pass) is carried with its object and
+    // projected again; the floor gives 0.
+    let yaml = "
+render: { width: 65, height: 49, max_depth: 1, samples: 1 }
+camera: { position: [0, 1, 5], look_at: [0, 1, 0], fov: 90 }
+objects:
+  - plane: { point: [0, 0, 0], normal: [0, 1, 0], material: { diffuse: [0.5, 0.5, 0.5] } }
+  - sphere: { center: [-1, 1, 0], radius: 0.6, material: { diffuse: [0.8, 0.2, 0.1] } }
+    interpolation: linear
+    keys:
+      - { frame: 0, center: [-1, 1, 0] }
+      - { frame: 24, center: [1.4, 1, 0] }
+  - mesh: { file: blob.ply, scale: 0.6, translate: [1.2, 1.3, 0], material: { diffuse: [0.7, 0.6, 0.5] } }
+    interpolation: linear
+    keys:
+      - { frame: 0, rotate: [0, 0, 0] }
+      - { frame: 24, rotate: [0, 120, 0] }
+lights:
+  - ambient: { color: [1, 1, 1] }
+";
+    let tmp = scene("aov-objects", yaml);
+    std::fs::copy(
+        repo().join("sequences/models/blob.ply"),
+        tmp.join("blob.ply"),
+    )
+    .unwrap();
+    render_ok(
+        &tmp,
+        &[
+            "-o",
+            "f_##.exr",
+            "--aov",
+            "id,motion,position",
+            "--frames",
+            "6",
+        ],
+    );
+    let img = read_exr(&tmp.join("f_06.exr"));
+    let (u, v) = (channel(&img, "forward.u"), channel(&img, "forward.v"));
+    let id = channel(&img, "objectId");
+    let (px, py, pz) = (
+        channel(&img, "P.X"),
+        channel(&img, "P.Y"),
+        channel(&img, "P.Z"),
+    );
+    // Where a point is in the image: column and row, as the spec's projection (v up).
+    let project = |p: glam::DVec3| {
+        let e = p - glam::DVec3::new(0.0, 1.0, 5.0);
+        let z = -e.z;
+        (32.5 * (e.x / z + 1.0), 24.5 - 32.5 * e.y / z)
+    };
+    let (mut sphere, mut blob) = (0, 0);
+    for i in 0..u.len() {
+        let p = glam::DVec3::new(px[i].into(), py[i].into(), pz[i].into());
+        let q = match id[i] as i32 {
+            1 => {
+                sphere += 1;
+                p + glam::DVec3::new(0.1, 0.0, 0.0)
+            }
+            2 => {
+                blob += 1;
+                // 5° more about the y axis through the blob's translate.
+                let c = glam::DVec3::new(1.2, 1.3, 0.0);
+                c + glam::DQuat::from_rotation_y(5f64.to_radians()) * (p - c)
+            }
+            _ => {
+                assert_eq!((u[i], v[i]), (0.0, 0.0), "pixel {i} of the still floor");
+                continue;
+            }
+        };
+        let ((c0, r0), (c1, r1)) = (project(p), project(q));
+        // P is rounded to f32 in the file: allow for that.
+        assert!(
+            (f64::from(u[i]) - (c1 - c0)).abs() < 2e-3,
+            "pixel {i}: u {} vs {}",
+            u[i],
+            c1 - c0
+        );
+        assert!(
+            (f64::from(v[i]) - (r0 - r1)).abs() < 2e-3,
+            "pixel {i}: v {} vs {}",
+            v[i],
+            r0 - r1
+        );
+    }
+    assert!(
+        sphere > 40 && blob > 40,
+        "{sphere} sphere and {blob} blob pixels"
+    );
+    // Nothing moves on frame 24 and after (the last keys hold), so there vectors are 0.
+    render_ok(
+        &tmp,
+        &["-o", "g_##.exr", "--aov", "motion", "--frames", "24"],
+    );
+    let u = channel(&read_exr(&tmp.join("g_24.exr")), "forward.u");
+    assert!(u.iter().all(|&u| u == 0.0));
+}

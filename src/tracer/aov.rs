@@ -15,8 +15,10 @@ use super::{Settings, World, shade};
 use crate::camera::{Camera, screen_point};
 pub use crate::frame::Passes;
 use crate::lanes::{F64x1, V3};
-use crate::scene::{Scene, Shape};
+use crate::scene::{Object, Scene, Shape};
 use crate::settings::Aov;
+use crate::shutter::Next;
+use crate::timeline::motion::{Posed, Thing};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -42,12 +44,13 @@ fn layout(aov: Aov) -> &'static [(&'static str, usize)] {
 }
 
 /// The passes `settings.aov` asks for, seen from `camera` (the frame's, at its time; its lens
-/// is ignored), with motion towards `next` (the camera one frame later; without one, motion
-/// is 0). `None` when no pass is asked for or `stop` was set.
+/// is ignored) in `world` (posed at that time), with motion towards `next` (the camera and
+/// the moving things one frame later; without it, motion is 0). `None` when no pass is asked
+/// for or `stop` was set.
 pub fn render(
     world: &World,
     camera: &Camera,
-    next: Option<&Camera>,
+    next: Option<&Next>,
     settings: &Settings,
     stop: &AtomicBool,
 ) -> Option<Passes> {
@@ -60,6 +63,14 @@ pub fn render(
         .flat_map(layout)
         .map(|&(name, at)| (name, at, vec![0.0; pixels]))
         .collect();
+    // Each object's pose one frame later, where it moves.
+    let mut later: Vec<Option<Object>> = vec![None; world.scene.objects.len()];
+    for (thing, posed) in next.map_or(&[][..], |n| &n.poses[..]) {
+        if let (Thing::Object(i), Posed::Object(o)) = (thing, posed) {
+            later[*i] = Some(*o);
+        }
+    }
+    let next = next.map(|n| (&n.camera, &later[..]));
     // A band of rows at a time, so the records in flight stay small beside the channels.
     let band = BAND_ROWS * w as usize;
     for first in (0..pixels).step_by(band) {
@@ -88,10 +99,13 @@ pub fn render(
     })
 }
 
+/// The camera one frame later, and each object's pose then where it moves (by index).
+type Later<'a> = (&'a Camera, &'a [Option<Object>]);
+
 /// The passes of pixel (row, col): its centre's pinhole eye ray and that ray's nearest hit.
 fn pixel(
     world: &World,
-    (camera, next): (&Camera, Option<&Camera>),
+    (camera, next): (&Camera, Option<Later>),
     (w, h): (u32, u32),
     (row, col): (u32, u32),
 ) -> Record {
@@ -117,7 +131,16 @@ fn pixel(
     let (n, albedo) = shade::first_surface(world, &ray, &hit, width);
     let p = (ray.origin + ray.dir * hit.t).lane(0);
     let [u, v] = match next {
-        Some(next) => motion(p, camera, next, (w, h)),
+        Some((next, later)) => {
+            let k = hit.object.0 as usize;
+            // An object that holds still keeps P exactly (the carry would round).
+            let now = &world.scene.objects[k];
+            let q = match &later[k] {
+                Some(then) if then != now => carried(p, now, then),
+                _ => p,
+            };
+            motion((p, q), camera, next, (w, h))
+        }
         None => [0.0; 2],
     };
     let f = |v: DVec3| v.to_array().map(|c| c as f32);
@@ -138,10 +161,59 @@ fn pixel(
     ]
 }
 
-/// Where `p` is in the image of `next` minus where it is in the image of `now`, in pixels:
-/// u to the right, v up (Nuke's `forward` vectors). 0 when `p` is not in front of both.
-fn motion(p: DVec3, now: &Camera, next: &Camera, size: (u32, u32)) -> [f32; 2] {
-    match (project(p, now, size), project(p, next, size)) {
+/// Where the surface point p of object `now` is when the object is posed `then`: the same
+/// point of the object. A sphere's follows its centre and scales with its radius; a mesh's
+/// keeps its local coordinates; a plane's turns with the normal (the shortest turn) about the
+/// plane's point and follows the point.
+fn carried(p: DVec3, now: &Object, then: &Object) -> DVec3 {
+    match (now.shape, then.shape) {
+        (
+            Shape::Sphere {
+                center: c0,
+                radius: r0,
+            },
+            Shape::Sphere {
+                center: c1,
+                radius: r1,
+            },
+        ) => c1 + (p - c0) * (r1 / r0),
+        (Shape::Mesh { place: a, .. }, Shape::Mesh { place: b, .. }) => {
+            b.point(a.to_local() * (p - a.translate))
+        }
+        (
+            Shape::Plane {
+                point: a,
+                normal: na,
+                ..
+            },
+            Shape::Plane {
+                point: b,
+                normal: nb,
+                ..
+            },
+        ) => b + turned(p - a, na, nb),
+        _ => p,
+    }
+}
+
+/// v turned by the shortest rotation that takes the unit vector n to the unit vector m
+/// (Rodrigues' formula with c = n × m and d = n·m, which are the axis times sin and the cos of
+/// the angle): v·d + c × v + c·((c·v)/(1 + d)); v itself when 1 + d ≤ 1e-9 (n and m opposite:
+/// no shortest turn).
+fn turned(v: DVec3, n: DVec3, m: DVec3) -> DVec3 {
+    let (c, d) = (n.cross(m), n.dot(m));
+    // Not `1 + d > 1e-9` (NaN included): no turn.
+    if (1.0 + d).partial_cmp(&1e-9) != Some(std::cmp::Ordering::Greater) {
+        return v;
+    }
+    v * d + c.cross(v) + c * (c.dot(v) / (1.0 + d))
+}
+
+/// Where `q` (p one frame later) is in the image of `next` minus where p is in the image of
+/// `now`, in pixels: u to the right, v up (Nuke's `forward` vectors). 0 when either is not in
+/// front of its camera.
+fn motion((p, q): (DVec3, DVec3), now: &Camera, next: &Camera, size: (u32, u32)) -> [f32; 2] {
+    match (project(p, now, size), project(q, next, size)) {
         (Some((c0, r0)), Some((c1, r1))) => {
             let (u, v) = ((c1 - c0) as f32, (r0 - r1) as f32);
             match u.is_finite() && v.is_finite() {
@@ -224,13 +296,27 @@ mod tests {
     fn a_camera_moving_right_moves_the_picture_left() {
         // fov 90 at distance 1: the image's half width of 4 pixels spans 1 unit.
         let p = DVec3::new(0.0, 0.0, 0.0);
-        assert_eq!(motion(p, &camera(0.0), &camera(0.0), (8, 6)), [0.0, 0.0]);
-        let [u, v] = motion(p, &camera(0.0), &camera(0.25), (8, 6));
+        assert_eq!(
+            motion((p, p), &camera(0.0), &camera(0.0), (8, 6)),
+            [0.0, 0.0]
+        );
+        let [u, v] = motion((p, p), &camera(0.0), &camera(0.25), (8, 6));
         assert!((u + 1.0).abs() < 1e-6 && v == 0.0, "{u} {v}");
+        // The point moving right by as much, seen from a still camera, moves right.
+        let q = DVec3::new(0.25, 0.0, 0.0);
+        let [u, v] = motion((p, q), &camera(0.0), &camera(0.0), (8, 6));
+        assert!((u - 1.0).abs() < 1e-6 && v == 0.0, "{u} {v}");
+        // Both moving together: no motion on screen.
+        let [u, v] = motion((p, q), &camera(0.0), &camera(0.25), (8, 6));
+        assert!(u.abs() < 1e-6 && v == 0.0, "{u} {v}");
+        // A quarter turn of the plane y = 0 to x = 0 about the origin takes +x to −y.
+        let t = turned(DVec3::X, DVec3::Y, DVec3::X);
+        assert!((t - DVec3::NEG_Y).length() < 1e-15, "{t}");
+        assert_eq!(turned(DVec3::Z, DVec3::Y, DVec3::Y), DVec3::Z);
         // Behind the next camera: no motion.
         assert_eq!(
             motion(
-                DVec3::new(0.0, 0.0, 2.0),
+                (DVec3::new(0.0, 0.0, 2.0), DVec3::new(0.0, 0.0, 2.0)),
                 &camera(0.0),
                 &camera(0.0),
                 (8, 6)
