@@ -1,0 +1,521 @@
+#!/usr/bin/env python3
+# An independent implementation of frames with moving objects and lights, written from
+# docs/spec/motion.md, docs/spec/timeline.md, docs/spec/tracer.md, docs/spec/mesh.md,
+# docs/spec/f32.md, docs/spec/output.md and docs/sequence-file.md ("Things that move") alone,
+# never from rayreel's code. It builds on the other references (imported, not copied):
+#   - camera_reference.py: the tracks of timeline.md (centripetal Catmull-Rom shapes with their
+#     Gauss-Legendre arc length, Fritsch-Carlson rates m_k, stops, turn-backs);
+#   - mesh_reference.py: the f64 tracer (spheres, planes, OBJ meshes and their placement,
+#     point / directional / spot / ambient lights, paths);
+#   - film_reference.py: film frames' Owen-scrambled Sobol' points and seeds, the rounds of
+#     adaptive sampling and the film filter.
+# What it adds (motion.md): keys -> key values (carried over, first key from the still thing,
+# normals and directions normalised, numbers as (r, 0, 0), a spot's angles one track), key
+# times (`time: x`, `time: a/b`, `frame: n`), the thing at time t, the shutter's 256 instants
+# and which frames become film frames because things move while the shutter is open, each
+# sample traced in the scene posed at its own instant.
+#
+# Where the docs leave an f64 operation order open (tracks' formulas), this file states the
+# reading it takes (READINGS below); pixels cannot tell those apart (a pose an ulp off moves an
+# f32 pixel value with probability ~1e-9), so they are written down for the spec's authors.
+#
+# Usage: python3 motion_reference.py [CASE ...]     (needs numpy and Pillow; OpenEXR optional)
+#   writes motion/CASE.yaml; with RAYREEL=path/to/rayreel it renders each case's frames with
+#   rayreel and compares every channel byte of the 8-bit PNG and, with the OpenEXR module,
+#   every byte of the 32-bit float EXR values; the last line is `total: E/N channel bytes equal`.
+import copy, json, math, os, re, struct, subprocess, sys, tempfile
+import numpy as np
+from PIL import Image
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import camera_reference as cr  # noqa: E402
+import film_reference as fr  # noqa: E402
+import mesh_reference as mr  # noqa: E402
+from mesh_reference import normalize  # noqa: E402
+
+MOTIONDIR = os.path.join(HERE, 'motion')
+mr.MESHDIR = MOTIONDIR
+
+# mesh files are read once, whatever the number of posed scenes built from them
+_MESH_FILES = {}
+_MeshFile = mr.MeshFile
+def _cached_mesh_file(path):
+    if path not in _MESH_FILES:
+        _MESH_FILES[path] = _MeshFile(path)
+    return _MESH_FILES[path]
+mr.MeshFile = _cached_mesh_file
+
+M64 = (1 << 64) - 1
+
+# ---------------------------------------------------------------- readings of open points
+# (each also listed in the report: docs/spec/timeline.md gives formulas, not their f64 order)
+READINGS = {
+    # straight shape "p1 + (p2 − p1)·σ/L_k": left to right, ((p2 − p1)·σ)/L_k per component
+    'line': 'left-to-right',
+    # smooth timing "L_k·(3u² − 2u³) + h_k·(m_k·(u³ − 2u² + u) + m_{k+1}·(u³ − u²))" with
+    # u2 = u·u, u3 = u2·u, 3u² = 3·u2, the sums left to right
+    'hermite': 'u2-u3',
+}
+
+
+# ---------------------------------------------------------------- keys and tracks (motion.md)
+# the track each keyable field belongs to, per kind of thing, and whether its shape is curved
+# under `smooth` (motion.md "Keyable fields")
+FIELDS = {
+    'mesh': {'scale': 'scale', 'rotate': 'rotate', 'translate': 'translate'},
+    'sphere': {'center': 'center', 'radius': 'radius'},
+    'plane': {'point': 'point', 'normal': 'normal'},
+    'point': {'position': 'position', 'ambient': 'ambient', 'diffuse': 'diffuse', 'specular': 'specular'},
+    'directional': {'direction': 'direction', 'ambient': 'ambient', 'diffuse': 'diffuse', 'specular': 'specular'},
+    'spot': {'position': 'position', 'direction': 'direction', 'inner_angle': 'angles', 'outer_angle': 'angles',
+             'ambient': 'ambient', 'diffuse': 'diffuse', 'specular': 'specular'},
+    'ambient': {'color': 'color'},
+}
+CURVED = {'mesh': {'rotate', 'translate'}, 'sphere': {'center'}, 'plane': {'point'}, 'point': {'position'},
+          'directional': set(), 'spot': {'position'}, 'ambient': set()}
+
+
+def vec(x):
+    return [float(c) for c in x]
+
+
+def still_value(kind, still, track):
+    """The first key's default for a track: the thing as the loader built it."""
+    if track == 'scale':
+        s = still.get('scale', 1)
+        return vec(s) if isinstance(s, list) else [float(s)] * 3
+    if track in ('rotate', 'translate'):
+        return vec(still.get(track, [0, 0, 0]))
+    if track == 'radius':
+        return [float(still['radius']), 0.0, 0.0]
+    if track in ('normal', 'direction'):
+        return list(normalize(vec(still[track])))
+    if track == 'angles':
+        return [float(still['inner_angle']), float(still['outer_angle']), 0.0]
+    if track in ('ambient', 'diffuse', 'specular') and kind != 'ambient':
+        return vec(still.get(track, [0, 0, 0]))
+    return vec(still[track])
+
+
+def key_value(track, key, previous):
+    """The value a key gives a track, converted as the loader converts a still field."""
+    if track == 'scale':
+        s = key['scale']
+        return vec(s) if isinstance(s, list) else [float(s)] * 3
+    if track == 'radius':
+        return [float(key['radius']), 0.0, 0.0]
+    if track in ('normal', 'direction'):
+        return list(normalize(vec(key[track])))
+    if track == 'angles':
+        return [float(key.get('inner_angle', previous[0])), float(key.get('outer_angle', previous[1])), 0.0]
+    return vec(key[track])
+
+
+def key_time(key, fps, first_frame=0):
+    """timeline.md "Inputs": `time: x`, `time: a/b` (one f64 division), `frame: n`."""
+    if 'frame' in key:
+        return float(key['frame'] - first_frame) / fps
+    x = key['time']
+    if isinstance(x, Frac):
+        return float(x.a) / float(x.b)
+    return float(x)
+
+
+class Frac:
+    """A key's `time: a/b`, written unquoted in the YAML."""
+    def __init__(self, a, b):
+        self.a, self.b = a, b
+
+
+class ThingTrack(cr.Track):
+    """camera_reference's track (shapes, lengths, stops, rates) evaluated with the operation
+    order READINGS states: the value at t only."""
+    def value(self, t):
+        T, n, q = self.times, len(self.q), self.q
+        if n == 1 or t < T[0]:
+            return q[0]
+        if t >= T[-1]:
+            return q[-1]
+        k = max(i for i in range(n - 1) if T[i] <= t)
+        h = T[k + 1] - T[k]
+        u = (t - T[k]) / h
+        L = self.L[k]
+        if self.timing == 'linear':
+            a, b = self.stops[k], self.stops[k + 1]
+            if a and b:
+                e = (u * u) * (3.0 - 2.0 * u)
+            elif a:
+                e = u * u
+            elif b:
+                e = u * (2.0 - u)
+            else:
+                e = u
+            s = L * e
+        else:
+            m0, m1 = self.m[k], self.m[k + 1]
+            u2 = u * u
+            u3 = u2 * u
+            s = L * (3.0 * u2 - 2.0 * u3) + h * (m0 * ((u3 - 2.0 * u2) + u) + m1 * (u3 - u2))
+            s = min(max(s, 0.0), L)
+        shape = self.shapes[k]
+        if shape is None:
+            return q[k]
+        if shape == 'line':
+            p1, p2 = q[k], q[k + 1]
+            return [p1[c] + ((p2[c] - p1[c]) * s) / L for c in range(3)]
+        return shape.at(s)
+
+
+class Thing:
+    """One object or light with keys: its tracks through the key values."""
+    def __init__(self, tag, index, entry, fps, default_interp):
+        (self.kind, self.still), = [(k, v) for k, v in entry.items() if k not in ('keys', 'interpolation')]
+        self.tag, self.index = tag, index
+        interp = entry.get('interpolation', default_interp)
+        keys = entry['keys']
+        fields = FIELDS[self.kind]
+        self.tracks = []
+        for tr in dict.fromkeys(fields[f] for k in keys for f in k if f in fields):
+            prev = still_value(self.kind, self.still, tr)
+            values = []
+            for k in keys:
+                if any(fields.get(f) == tr for f in k):
+                    prev = key_value(tr, k, prev)
+                values.append(prev)
+            times = [key_time(k, fps) for k in keys]
+            stops = [k.get('ease', 'pass') == 'stop' for k in keys]
+            curved = interp == 'smooth' and tr in CURVED[self.kind]
+            self.tracks.append((tr, ThingTrack(times, values, stops, curved, interp)))
+
+    def pose(self, t):
+        """The keyed fields of the thing at t, as still fields (motion.md "The thing at time t")."""
+        out = {}
+        for tr, track in self.tracks:
+            v = [float(c) for c in track.value(t)]
+            if tr == 'radius':
+                out['radius'] = v[0]
+            elif tr == 'angles':
+                out['inner_angle'] = min(v[0], v[1])
+                out['outer_angle'] = v[1]
+            else:
+                # normals and directions: the loader (mesh_reference.Scene) normalises them again
+                out[tr] = v
+        return out
+
+
+def things_of(d):
+    tl = d.get('timeline', {})
+    fps = float(tl.get('fps', 24))
+    interp = tl.get('interpolation', 'smooth')
+    out = []
+    for tag, group in ((0, 'objects'), (1, 'lights')):
+        for i, e in enumerate(d[group]):
+            if 'keys' in e:
+                out.append(Thing(tag, i, e, fps, interp))
+    return out, fps
+
+
+def posed_scene(d, things, t, camera=None):
+    """The still scene dict at t (keys dropped, keyed fields replaced) for mesh_reference.Scene."""
+    s = {k: v for k, v in d.items() if k not in ('objects', 'lights', 'timeline')}
+    s['objects'] = [{k: copy.deepcopy(v) for k, v in e.items() if k not in ('keys', 'interpolation')} for e in d['objects']]
+    s['lights'] = [{k: copy.deepcopy(v) for k, v in e.items() if k not in ('keys', 'interpolation')} for e in d['lights']]
+    poses = []
+    for th in things:
+        p = th.pose(t)
+        poses.append(p)
+        (kind, fields), = s['objects' if th.tag == 0 else 'lights'][th.index].items()
+        fields.update(p)
+    if camera is not None:
+        s['camera'] = camera
+    return s, poses
+
+
+# ---------------------------------------------------------------- frames (motion.md "Frames, the shutter and samples")
+def unit(b):
+    return float(b >> 11) * 2.0 ** -53
+
+
+class Frame:
+    def __init__(self, d, n):
+        self.d, self.n = d, n
+        self.things, self.fps = things_of(d)
+        r = d['render']
+        self.W, self.H = r['width'], r['height']
+        self.t = float(n) / self.fps  # timeline.md "Frames" (first_frame 0)
+        self.scene_t, self.pose_t = posed_scene(d, self.things, self.t)
+        self.instants = None
+        theta = float(r.get('shutter', 0))
+        if theta > 0:
+            delta = (theta / 360.0) / self.fps
+            o = float(r.get('shutter_offset', 0))
+            tm = [self.t + delta * ((o - 0.5) + (m + 0.5) / 256.0) for m in range(256)]
+            if any(posed_scene(d, self.things, x)[1] != self.pose_t for x in tm):
+                self.instants = tm  # things move while the shutter is open: a film frame
+        self._scenes = {}
+
+    def scene(self, m):
+        """The scene posed at instant m (None: at the frame's time t)."""
+        if m not in self._scenes:
+            t = self.t if m is None else self.instants[m]
+            self._scenes[m] = mr.Scene(posed_scene(self.d, self.things, t)[0])
+        return self._scenes[m]
+
+    def trace(self, sc, i, j, u, v):
+        W, H = self.W, self.H
+        x = -1.0 + (2.0 * (j + u)) / W
+        y = ((1.0 - (2.0 * (i + v)) / H) * H) / W
+        dd = normalize(mr.add(mr.add(sc.fwd, mr.smul(x * sc.s, sc.right)), mr.smul(y * sc.s, sc.up_c)))
+        return sc.trace_tree(sc.pos, dd) if sc.trees else sc.trace(sc.pos, dd)
+
+    def render(self):
+        r = self.d['render']
+        if self.instants is None:
+            return self.render_still(int(r.get('samples', 1)))
+        return self.render_film()
+
+    def render_still(self, n):
+        """tracer.md: one sample at the centre, or n = k² jittered samples (Sample offsets)."""
+        k2 = math.isqrt(n)
+        assert k2 * k2 == n, 'the reference does 1 or k² samples on still frames'
+        sc = self.scene(None)
+        img = np.zeros((self.H, self.W, 3))
+        for i in range(self.H):
+            for j in range(self.W):
+                seed = fr.mix(fr.mix(0x9e3779b97f4a7c15 ^ self.n) ^ (i * self.W + j))
+                acc = (0.0, 0.0, 0.0)
+                for k in range(n):
+                    if n == 1:
+                        u = v = 0.5
+                    else:
+                        h = fr.mix(seed ^ k)
+                        u = ((k % k2) + unit(h)) / k2
+                        v = ((k // k2) + unit(fr.mix(h))) / k2
+                    acc = mr.add(acc, self.trace(sc, i, j, u, v))
+                img[i, j] = acc if n == 1 else tuple(c / n for c in acc)
+        return img
+
+    def film_sample(self, i, j, k, seeds):
+        """Sample k of a film frame: Sobol' (u, v, a, b, τ); the scene posed at instant m."""
+        x = fr.sobol_point(k, seeds)
+        m = min(int(x[4] * 256.0), 255)
+        return self.trace(self.scene(m), i, j, x[0], x[1])
+
+    def lone_sample(self, i, j):
+        """The lone sample of a one-sample film frame: offset (0.5, 0.5), τ = random3's first."""
+        z = fr.mix(fr.mix(fr.mix(0x9e3779b97f4a7c15 ^ self.n) ^ (i * self.W + j)) ^ 0x6a09e667f3bcc909)
+        tau = unit(fr.mix(z ^ 0))
+        m = min(int(tau * 256.0), 255)
+        return self.trace(self.scene(m), i, j, 0.5, 0.5)
+
+    def render_film(self):
+        r = self.d['render']
+        ad = r.get('adaptive')
+        sampling_set = 'samples' in r or 'adaptive' in r or 'quality' in r
+        if sampling_set:
+            n = int(r.get('samples', 1))
+            max_s = int(ad.get('max_samples', 32)) if ad else n
+            thr = float(ad.get('threshold', 0.03)) if ad else 0.03
+        else:
+            # sequence-file.md: "on film, 2 (a shutter on a moving camera) or 4 (a lens some key
+            # opens) with adaptive rounds up to 64 at threshold 0.035" (reading: things moving
+            # under a shutter count as the shutter's case)
+            n, max_s, thr = 2, 64, 0.035
+        denoise = r.get('denoise', True)
+        fr.FRAME, fr.W, fr.H = self.n, self.W, self.H
+        img = np.zeros((self.H, self.W, 3))
+        if n == 1:
+            assert not ad
+            for i in range(self.H):
+                for j in range(self.W):
+                    img[i, j] = self.lone_sample(i, j)
+            return img
+        fr.sample_colour = self.film_sample
+        keep_filter = fr.film_filter
+        if not denoise:
+            fr.film_filter = lambda mean, est: mean
+        try:
+            if not denoise and max_s == n:
+                px = fr.render_uniform(n)
+            else:
+                px = fr.render_rounds(n, max_s, thr)
+        finally:
+            fr.film_filter = keep_filter
+        for p, c in enumerate(px):
+            img[p // self.W, p % self.W] = c
+        return img
+
+
+# ---------------------------------------------------------------- the cases
+MATS = {k: mr.MATERIALS[k] for k in ('clay', 'blue', 'green', 'gold', 'floor', 'mirror')}
+LIGHTS = copy.deepcopy(mr.LIGHTS)
+FLOOR = {'plane': {'point': [0, -1, 0], 'normal': [0, 1, 0], 'material': 'floor'}}
+CAMERA = {'position': [0, 1.2, 5], 'look_at': [0, -0.1, 0], 'fov': 60}
+
+
+def case(objects, lights=LIGHTS, w=48, h=27, camera=CAMERA, **render):
+    r = {'width': w, 'height': h, 'samples': 1, 'encoding': 'linear', 'max_depth': 3,
+         'background': [0.05, 0.07, 0.1]}
+    r.update(render)
+    return {'render': r, 'camera': copy.deepcopy(camera), 'materials': MATS,
+            'objects': copy.deepcopy(objects), 'lights': copy.deepcopy(lights)}
+
+
+# a sphere keyed by centre (curved under smooth) and radius (straight), keys by frame and by a
+# rational time; a second one linear with ease stop; the floor's keys hold it still
+SPHERES = [
+    FLOOR,
+    {'sphere': {'center': [-1.5, -0.2, 0], 'radius': 0.5, 'material': 'clay'},
+     'keys': [{'frame': 6, 'center': [-1.6, 0, 0.3]},
+              {'frame': 30, 'center': [-0.3, 0.5, -0.4], 'radius': 0.7},
+              {'time': Frac(71, 24), 'center': [0.9, 0.1, 0.6], 'radius': 0.4},
+              {'time': 4, 'center': [1.7, -0.3, -0.2]}]},
+    {'sphere': {'center': [0.8, 0.9, -1.5], 'radius': 0.45, 'material': 'mirror'},
+     'interpolation': 'linear',
+     'keys': [{'time': 0.5, 'center': [0.8, 0.9, -1.5]},
+              {'time': 2, 'center': [-0.7, 1.1, -1.2], 'radius': 0.3, 'ease': 'stop'},
+              {'time': 3.25, 'center': [0.2, -0.2, -0.6], 'ease': 'stop'}]},
+]
+# light keys: a point light's position (curved) and colours, a spot's position, direction and
+# angles (one track), a directional light's direction (turning), an ambient light's colour
+LIGHTS_KEYED = [
+    {'point': {'position': [4, 6, 5], 'ambient': [0.2, 0.2, 0.2], 'diffuse': [1, 1, 1], 'specular': [1, 1, 1]},
+     'keys': [{'time': 0, 'diffuse': [1, 0.9, 0.8]},
+              {'time': 1, 'position': [-3, 4, 4], 'diffuse': [0.6, 0.3, 0.1]},
+              {'time': 2, 'position': [0, 2, 6], 'specular': [0.3, 0.3, 1]}]},
+    {'spot': {'position': [-1, 3, 2], 'direction': [0.3, -1, -0.6], 'inner_angle': 15, 'outer_angle': 30,
+              'ambient': [0.1, 0.1, 0.1], 'diffuse': [0.8, 0.8, 0.6], 'specular': [1, 1, 1]},
+     'interpolation': 'linear',
+     'keys': [{'frame': 0},
+              {'frame': 24, 'position': [1.5, 3, 1], 'direction': [-0.5, -1, -0.2], 'inner_angle': 5, 'outer_angle': 12},
+              {'frame': 48, 'outer_angle': 40, 'ease': 'stop'}]},
+    {'directional': {'direction': [1, -1.5, -0.7], 'diffuse': [0.3, 0.25, 0.2], 'specular': [0.4, 0.4, 0.4]},
+     'keys': [{'time': 0.25}, {'time': 1.75, 'direction': [-1, -1, 0.5], 'diffuse': [0.1, 0.3, 0.35]}]},
+    {'ambient': {'color': [0.05, 0.05, 0.07]},
+     'keys': [{'time': 0, 'color': [0, 0, 0]}, {'time': 2, 'color': [0.2, 0.1, 0.05]}]},
+]
+STILL_OBJECTS = [
+    FLOOR,
+    {'sphere': {'center': [-0.9, -0.3, 0], 'radius': 0.7, 'material': 'clay'}},
+    {'sphere': {'center': [1.0, -0.5, -0.6], 'radius': 0.5, 'material': 'blue'}},
+]
+# a turntable (rotate 0 -> 360 about y, linear, keyed by frame) and a mesh whose translate
+# (curved) and scale (straight, per factor) move under smooth with a stop; a tilting plane
+MESHES = [
+    FLOOR,
+    {'mesh': {'file': 'arrow.obj', 'material': 'gold', 'shading': 'flat', 'translate': [-0.9, -0.2, 0], 'rotate': [0, 0, 10]},
+     'interpolation': 'linear',
+     'keys': [{'frame': 0, 'rotate': [0, 0, 10]}, {'frame': 48, 'rotate': [0, 360, 10]}]},
+    {'mesh': {'file': 'arrow.obj', 'material': 'clay', 'shading': 'phong', 'translate': [1.2, 0, -0.5], 'scale': 0.8},
+     'keys': [{'time': 0},
+              {'time': 0.75, 'translate': [0.9, 0.4, 0], 'scale': [0.6, 1.1, 0.8], 'ease': 'stop'},
+              {'time': 2, 'translate': [1.4, -0.3, 0.5], 'scale': [0.9, 0.5, 0.7], 'rotate': [30, -20, 45]}]},
+    {'plane': {'point': [0, 0, -3], 'normal': [0, 0, 1], 'material': 'green'},
+     'keys': [{'time': 0.5}, {'time': 1.5, 'point': [0, 0, -2.5], 'normal': [0.4, 0.2, 1]}]},
+]
+# motion blur: a fast sphere under an open shutter, the camera still
+BLUR = [
+    FLOOR,
+    {'sphere': {'center': [0, 0, 0], 'radius': 0.45, 'material': 'clay'},
+     'interpolation': 'linear',
+     'keys': [{'time': 0, 'center': [-2.5, 0, 0]}, {'time': 1, 'center': [2.5, 0.5, 0]}]},
+    {'sphere': {'center': [0.6, -0.6, 1.2], 'radius': 0.3, 'material': 'blue'},
+     'keys': [{'time': 0.2, 'radius': 0.3}, {'time': 0.6, 'radius': 0.5}, {'time': 1, 'radius': 0.2}]},
+]
+SPIN = [
+    FLOOR,
+    {'mesh': {'file': 'arrow.obj', 'material': 'gold', 'shading': 'phong', 'scale': 1.3},
+     'interpolation': 'linear',
+     'keys': [{'frame': 0, 'rotate': [0, 0, 0]}, {'frame': 12, 'rotate': [0, 360, 0]}]},
+]
+
+CASES = {
+    # name: (scene, frames)
+    'spheres': (case(SPHERES, max_depth=3), [0, 4, 6, 17, 30, 52, 71, 80, 96]),
+    'lights': (case(STILL_OBJECTS, lights=LIGHTS_KEYED), [0, 6, 24, 30, 41, 48]),
+    'meshes': (case(MESHES, w=40, h=24), [0, 7, 18, 30, 48]),
+    'blur': (case(BLUR, w=40, h=24, shutter=180, samples=4, denoise=False), [6, 12]),
+    'blur_filter': (case(BLUR, w=40, h=24, shutter=180, samples=4), [12]),
+    'blur_rounds': (case(BLUR, w=32, h=18, shutter=270, shutter_offset=0.5, samples=2,
+                         adaptive={'threshold': 0.05, 'max_samples': 8}, denoise=False), [9]),
+    'blur_one': (case(BLUR, w=40, h=24, shutter=180, samples=1), [12]),
+    'blur_f32': (case(BLUR, w=40, h=24, shutter=180, samples=4, denoise=False, precision='f32'), [12]),
+    # after the last key nothing moves while the shutter is open: a still frame (n² jitter)
+    'blur_held': (dict(case(BLUR, w=40, h=24, shutter=90, samples=4, denoise=False),
+                       timeline={'fps': 24, 'duration': 2, 'keyframes': [{'time': 0}]}), [26]),
+    'spin': (case(SPIN, w=40, h=24, shutter=180, samples=4, denoise=False,
+                  camera={'position': [0, 1.5, 3.5], 'look_at': [0, 0, 0], 'fov': 50}), [5]),
+}
+
+
+def to_yaml(d):
+    def flow(x):
+        s = json.dumps(x, default=lambda f: '%d/%d' % (f.a, f.b))
+        return re.sub(r'"time": "(\d+)/(\d+)"', r'"time": \1/\2', s)
+    out = ['render: ' + flow(d['render']), 'output: out.png', 'camera: ' + flow(d['camera'])]
+    if 'timeline' in d:
+        out.append('timeline: ' + flow(d['timeline']))
+    out.append('materials:')
+    out += ['  %s: %s' % (k, flow(v)) for k, v in d['materials'].items()]
+    out += ['objects:'] + ['  - ' + flow(o) for o in d['objects']]
+    out += ['lights:'] + ['  - ' + flow(l) for l in d['lights']]
+    return '\n'.join(out) + '\n'
+
+
+def rayreel(rr, ypath, frame, out, *extra):
+    subprocess.run([rr, 'render', ypath, '--frames', str(frame), '-o', out, '--force', '--quiet', *extra], check=True)
+
+
+def main():
+    names = sys.argv[1:] or list(CASES)
+    rr = os.environ.get('RAYREEL')
+    try:
+        import OpenEXR
+    except ImportError:
+        OpenEXR = None
+        print('no OpenEXR module: comparing the 8-bit PNG bytes only')
+    tmp = tempfile.mkdtemp(prefix='motion_reference_')
+    total = [0, 0]
+    for name in names:
+        d, frames = CASES[name]
+        ypath = os.path.join(MOTIONDIR, name + '.yaml')
+        open(ypath, 'w').write(to_yaml(d))
+        for n in frames:
+            f = Frame(d, n)
+            img = f.render()
+            out = mr.encode_linear(img)
+            tag = '%s@%d' % (name, n)
+            kind = 'film, %d things move' % len(f.things) if f.instants else 'still shutter'
+            if not rr:
+                print(f'{tag}: rendered ({kind}; no RAYREEL to compare with)')
+                continue
+            rpath = os.path.join(tmp, '%s_%d.png' % (name, n))
+            rayreel(rr, ypath, n, rpath)
+            got = np.asarray(Image.open(rpath).convert('RGB'))
+            eq = int((got == out).sum())
+            total[0] += eq; total[1] += out.size
+            line = f'{tag} ({kind}): png {eq}/{out.size} channel bytes equal'
+            bad = np.argwhere((got != out).any(axis=2))
+            if OpenEXR is not None:
+                epath = os.path.join(tmp, '%s_%d.exr' % (name, n))
+                rayreel(rr, ypath, n, epath, '--exr-precision', 'float')
+                ex = np.ascontiguousarray(OpenEXR.File(epath).channels()['RGB'].pixels, dtype='<f4')
+                mine = np.ascontiguousarray(img.astype('<f4'))
+                eb = ex.view(np.uint8); mb = mine.view(np.uint8)
+                e2 = int((eb == mb).sum())
+                total[0] += e2; total[1] += mb.size
+                line += f', exr float {e2}/{mb.size} bytes equal'
+                bad = np.argwhere((ex != mine).any(axis=2))
+                for (a, b) in bad[:8]:
+                    line += f'\n   ({a}, {b}) rayreel {ex[a, b]} reference {mine[a, b]}'
+            else:
+                for (a, b) in bad[:8]:
+                    line += f'\n   ({a}, {b}) rayreel {got[a, b]} reference {out[a, b]}'
+            print(line, flush=True)
+    if rr:
+        print(f'total: {total[0]}/{total[1]} channel bytes equal')
+
+
+if __name__ == '__main__':
+    main()
