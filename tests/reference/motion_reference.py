@@ -232,6 +232,34 @@ def posed_scene(d, things, t, camera=None):
     return s, poses
 
 
+def camera_tracks(d, fps):
+    """timeline.md: a keyframed camera's position, look_at, up and fov tracks (keys carried
+    over, the first from `camera:`, up normalised), or None for a still `camera:`."""
+    tl = d.get('timeline', {})
+    keys = tl.get('keyframes')
+    if not keys:
+        return None
+    cam = d.get('camera', {})
+    prev = {'position': vec(cam['position']), 'look_at': vec(cam['look_at']),
+            'up': vec(cam.get('up', [0, 1, 0])), 'fov': [float(cam.get('fov', 90)), 0.0, 0.0]}
+    values = {f: [] for f in prev}
+    for k in keys:
+        for f in prev:
+            if f in k:
+                prev[f] = [float(k['fov']), 0.0, 0.0] if f == 'fov' else vec(k[f])
+            values[f].append(list(normalize(prev[f])) if f == 'up' else prev[f])
+    times = [key_time(k, fps) for k in keys]
+    stops = [k.get('ease', 'pass') == 'stop' for k in keys]
+    interp = tl.get('interpolation', 'smooth')
+    return {f: ThingTrack(times, values[f], stops, interp == 'smooth' and f != 'fov', interp) for f in values}
+
+
+def camera_at(tracks, t):
+    c = {f: [float(x) for x in tr.value(t)] for f, tr in tracks.items()}
+    c['fov'] = c['fov'][0]
+    return c
+
+
 # ---------------------------------------------------------------- frames (motion.md "Frames, the shutter and samples")
 def unit(b):
     return float(b >> 11) * 2.0 ** -53
@@ -244,22 +272,26 @@ class Frame:
         r = d['render']
         self.W, self.H = r['width'], r['height']
         self.t = float(n) / self.fps  # timeline.md "Frames" (first_frame 0)
-        self.scene_t, self.pose_t = posed_scene(d, self.things, self.t)
+        self.cams = camera_tracks(d, self.fps)
+        cam = lambda x: camera_at(self.cams, x) if self.cams else None
+        self.scene_t, self.pose_t = posed_scene(d, self.things, self.t, cam(self.t))
+        self.pose_t = (self.pose_t, cam(self.t))
         self.instants = None
         theta = float(r.get('shutter', 0))
         if theta > 0:
             delta = (theta / 360.0) / self.fps
             o = float(r.get('shutter_offset', 0))
             tm = [self.t + delta * ((o - 0.5) + (m + 0.5) / 256.0) for m in range(256)]
-            if any(posed_scene(d, self.things, x)[1] != self.pose_t for x in tm):
-                self.instants = tm  # things move while the shutter is open: a film frame
+            if any((posed_scene(d, self.things, x)[1], cam(x)) != self.pose_t for x in tm):
+                self.instants = tm  # things (or the camera) move while the shutter is open: a film frame
         self._scenes = {}
 
     def scene(self, m):
         """The scene posed at instant m (None: at the frame's time t)."""
         if m not in self._scenes:
             t = self.t if m is None else self.instants[m]
-            self._scenes[m] = mr.Scene(posed_scene(self.d, self.things, t)[0])
+            c = camera_at(self.cams, t) if self.cams else None
+            self._scenes[m] = mr.Scene(posed_scene(self.d, self.things, t, c)[0])
         return self._scenes[m]
 
     def trace(self, sc, i, j, u, v):
@@ -358,6 +390,7 @@ def case(objects, lights=LIGHTS, w=48, h=27, camera=CAMERA, **render):
     r = {'width': w, 'height': h, 'samples': 1, 'encoding': 'linear', 'max_depth': 3,
          'background': [0.05, 0.07, 0.1]}
     r.update(render)
+    r = {k: v for k, v in r.items() if v is not None}
     return {'render': r, 'camera': copy.deepcopy(camera), 'materials': MATS,
             'objects': copy.deepcopy(objects), 'lights': copy.deepcopy(lights)}
 
@@ -419,7 +452,7 @@ BLUR = [
     FLOOR,
     {'sphere': {'center': [0, 0, 0], 'radius': 0.45, 'material': 'clay'},
      'interpolation': 'linear',
-     'keys': [{'time': 0, 'center': [-2.5, 0, 0]}, {'time': 1, 'center': [2.5, 0.5, 0]}]},
+     'keys': [{'time': 0.1, 'center': [-5, 0, 0]}, {'time': 0.4, 'center': [5, 0.5, 0]}]},
     {'sphere': {'center': [0.6, -0.6, 1.2], 'radius': 0.3, 'material': 'blue'},
      'keys': [{'time': 0.2, 'radius': 0.3}, {'time': 0.6, 'radius': 0.5}, {'time': 1, 'radius': 0.2}]},
 ]
@@ -435,15 +468,24 @@ CASES = {
     'spheres': (case(SPHERES, max_depth=3), [0, 4, 6, 17, 30, 52, 71, 80, 96]),
     'lights': (case(STILL_OBJECTS, lights=LIGHTS_KEYED), [0, 6, 24, 30, 41, 48]),
     'meshes': (case(MESHES, w=40, h=24), [0, 7, 18, 30, 48]),
-    'blur': (case(BLUR, w=40, h=24, shutter=180, samples=4, denoise=False), [6, 12]),
-    'blur_filter': (case(BLUR, w=40, h=24, shutter=180, samples=4), [12]),
+    'blur': (case(BLUR, w=40, h=24, shutter=180, samples=4, denoise=False), [5, 6]),
+    'blur_filter': (case(BLUR, w=40, h=24, shutter=180, samples=4), [6]),
     'blur_rounds': (case(BLUR, w=32, h=18, shutter=270, shutter_offset=0.5, samples=2,
-                         adaptive={'threshold': 0.05, 'max_samples': 8}, denoise=False), [9]),
-    'blur_one': (case(BLUR, w=40, h=24, shutter=180, samples=1), [12]),
-    'blur_f32': (case(BLUR, w=40, h=24, shutter=180, samples=4, denoise=False, precision='f32'), [12]),
+                         adaptive={'threshold': 0.05, 'max_samples': 8}, denoise=False), [5]),
+    'blur_one': (case(BLUR, w=40, h=24, shutter=180, samples=1), [6]),
+    'blur_f32': (case(BLUR, w=40, h=24, shutter=180, samples=4, denoise=False, precision='f32'), [6]),
+    # no sampling set: film's default (rounds, the film filter)
+    'blur_default': (case(BLUR, w=32, h=18, shutter=180, samples=None), [6]),
     # after the last key nothing moves while the shutter is open: a still frame (n² jitter)
     'blur_held': (dict(case(BLUR, w=40, h=24, shutter=90, samples=4, denoise=False),
                        timeline={'fps': 24, 'duration': 2, 'keyframes': [{'time': 0}]}), [26]),
+    # the camera pans (linear keys) while the sphere crosses: each sample's camera and things
+    # are those of its instant
+    'pan': (dict(case(BLUR, w=40, h=24, shutter=180, samples=4, denoise=False),
+                 timeline={'fps': 24, 'interpolation': 'linear',
+                           'keyframes': [{'time': 0, 'position': [-1, 1.2, 5], 'look_at': [-0.5, -0.1, 0]},
+                                         {'time': 0.5, 'position': [1, 1.5, 4.5], 'look_at': [0.5, 0, 0], 'fov': 50}]}),
+            [6]),
     'spin': (case(SPIN, w=40, h=24, shutter=180, samples=4, denoise=False,
                   camera={'position': [0, 1.5, 3.5], 'look_at': [0, 0, 0], 'fov': 50}), [5]),
 }
@@ -453,7 +495,7 @@ def to_yaml(d):
     def flow(x):
         s = json.dumps(x, default=lambda f: '%d/%d' % (f.a, f.b))
         return re.sub(r'"time": "(\d+)/(\d+)"', r'"time": \1/\2', s)
-    out = ['render: ' + flow(d['render']), 'output: out.png', 'camera: ' + flow(d['camera'])]
+    out = ['render: ' + flow(d['render']), 'output: out_####.png', 'camera: ' + flow(d['camera'])]
     if 'timeline' in d:
         out.append('timeline: ' + flow(d['timeline']))
     out.append('materials:')
