@@ -260,6 +260,45 @@ def camera_at(tracks, t):
     return c
 
 
+# mesh.md "Placement": the file's up axis U (R <- R·U) and `origin`'s offset, which
+# mesh_reference.Placement leaves out; motion.md: the offset is computed once, from the unkeyed
+# scale and rotation, and subtracted from the keyed translate
+UP_ANGLES = {'y': (0, 0, 0), 'z': (-90, 0, 0), 'x': (0, 0, 90), '-y': (180, 0, 0), '-z': (90, 0, 0), '-x': (0, 0, -90)}
+
+
+def placement(mf, scale, rotate, translate, up):
+    pl = mr.Placement(mf, scale, rotate, translate)
+    up = up.lstrip('+')
+    if up != 'y':
+        pl.R = mr.matmul(pl.R, mr.Placement(mf, 1, UP_ANGLES[up], (0, 0, 0)).R)
+        pl.A = [[pl.R[k][i] / pl.s[i] for k in range(3)] for i in range(3)]
+    return pl
+
+
+def origin_offset(mf, still):
+    origin = still.get('origin', 'file')
+    if origin == 'file':
+        return (0.0, 0.0, 0.0)
+    pl = placement(mf, still.get('scale', 1), still.get('rotate', (0, 0, 0)), (0, 0, 0), still.get('up', 'y'))
+    used = sorted({k for t in mf.tris for k in t})
+    q = [pl.point(mf.P[k]) for k in used]  # T + R·(s ∘ p) with T = 0: the sum 0 + v taken
+    lo = tuple(min(p[c] for p in q) for c in range(3))
+    hi = tuple(max(p[c] for p in q) for c in range(3))
+    c = mr.vmul(mr.add(lo, hi), 0.5)
+    return c if origin == 'center' else (c[0], lo[1], c[2])
+
+
+def place_meshes(sc, posed):
+    """Rebuild the placements of meshes with `up` or `origin` (the posed fields as the loader)."""
+    for m in sc.meshes:
+        o = posed['objects'][m['idx']]['mesh']
+        if 'up' not in o and 'origin' not in o:
+            continue
+        mf = m['pl'].mf
+        T = mr.sub(tuple(map(float, o.get('translate', (0, 0, 0)))), origin_offset(mf, o))
+        m['pl'] = placement(mf, o.get('scale', 1), o.get('rotate', (0, 0, 0)), T, o.get('up', 'y'))
+
+
 # ---------------------------------------------------------------- frames (motion.md "Frames, the shutter and samples")
 def unit(b):
     return float(b >> 11) * 2.0 ** -53
@@ -291,7 +330,9 @@ class Frame:
         if m not in self._scenes:
             t = self.t if m is None else self.instants[m]
             c = camera_at(self.cams, t) if self.cams else None
-            self._scenes[m] = mr.Scene(posed_scene(self.d, self.things, t, c)[0])
+            posed = posed_scene(self.d, self.things, t, c)[0]
+            self._scenes[m] = mr.Scene(posed)
+            place_meshes(self._scenes[m], posed)
         return self._scenes[m]
 
     def trace(self, sc, i, j, u, v):
@@ -463,11 +504,26 @@ SPIN = [
      'keys': [{'frame': 0, 'rotate': [0, 0, 0]}, {'frame': 12, 'rotate': [0, 360, 0]}]},
 ]
 
+# the file's up axis under a keyed rotation (R(v_rotate)·U), and `origin: bottom` / `center`
+# under keyed translates (the offset from the unkeyed placement)
+PLACED = [
+    FLOOR,
+    {'mesh': {'file': 'arrow.obj', 'material': 'gold', 'shading': 'flat', 'up': 'z', 'translate': [-1.2, 0, 0], 'rotate': [20, 0, 0]},
+     'keys': [{'time': 0}, {'time': 1, 'rotate': [20, 180, 30]}, {'time': 2, 'rotate': [-40, 300, 30], 'ease': 'stop'}]},
+    {'mesh': {'file': 'arrow.obj', 'material': 'clay', 'shading': 'phong', 'up': '-x', 'origin': 'bottom', 'scale': [0.8, 1.2, 0.9],
+              'rotate': [0, 35, 0], 'translate': [1, -1, 0]},
+     'keys': [{'time': 0.5}, {'time': 1.25, 'translate': [0.6, -0.5, 0.8]}, {'time': 2, 'translate': [1.3, -1, -0.4]}]},
+    {'mesh': {'file': 'arrow.obj', 'material': 'blue', 'shading': 'gouraud', 'origin': 'center', 'scale': 0.6, 'translate': [0, 1, -1]},
+     'interpolation': 'linear',
+     'keys': [{'time': 0}, {'time': 2, 'translate': [0.3, 0.2, -1.5], 'ease': 'stop'}]},
+]
+
 CASES = {
     # name: (scene, frames)
     'spheres': (case(SPHERES, max_depth=3), [0, 4, 6, 17, 30, 52, 71, 80, 96]),
     'lights': (case(STILL_OBJECTS, lights=LIGHTS_KEYED), [0, 6, 24, 30, 41, 48]),
     'meshes': (case(MESHES, w=40, h=24), [0, 7, 18, 30, 48]),
+    'placed': (case(PLACED, w=40, h=24), [0, 17, 30, 44]),
     'blur': (case(BLUR, w=40, h=24, shutter=180, samples=4, denoise=False), [5, 6]),
     'blur_filter': (case(BLUR, w=40, h=24, shutter=180, samples=4), [6]),
     'blur_rounds': (case(BLUR, w=32, h=18, shutter=270, shutter_offset=0.5, samples=2,
