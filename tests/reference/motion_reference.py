@@ -71,9 +71,11 @@ FIELDS = {
     'spot': {'position': 'position', 'direction': 'direction', 'inner_angle': 'angles', 'outer_angle': 'angles',
              'ambient': 'ambient', 'diffuse': 'diffuse', 'specular': 'specular'},
     'ambient': {'color': 'color'},
+    'light:sphere': {'center': 'center', 'radius': 'radius', 'ambient': 'ambient', 'diffuse': 'diffuse', 'specular': 'specular'},
+    'light:rect': {'corner': 'corner', 'ambient': 'ambient', 'diffuse': 'diffuse', 'specular': 'specular'},
 }
 CURVED = {'mesh': {'rotate', 'translate'}, 'sphere': {'center'}, 'plane': {'point'}, 'point': {'position'},
-          'directional': set(), 'spot': {'position'}, 'ambient': set()}
+          'directional': set(), 'spot': {'position'}, 'ambient': set(), 'light:sphere': {'center'}, 'light:rect': {'corner'}}
 
 
 def vec(x):
@@ -172,9 +174,10 @@ class Thing:
     def __init__(self, tag, index, entry, fps, default_interp):
         (self.kind, self.still), = [(k, v) for k, v in entry.items() if k not in ('keys', 'interpolation')]
         self.tag, self.index = tag, index
+        kind = 'light:' + self.kind if tag == 1 and self.kind in ('sphere', 'rect') else self.kind
         interp = entry.get('interpolation', default_interp)
         keys = entry['keys']
-        fields = FIELDS[self.kind]
+        fields = FIELDS[kind]
         self.tracks = []
         for tr in dict.fromkeys(fields[f] for k in keys for f in k if f in fields):
             prev = still_value(self.kind, self.still, tr)
@@ -185,7 +188,7 @@ class Thing:
                 values.append(prev)
             times = [key_time(k, fps) for k in keys]
             stops = [k.get('ease', 'pass') == 'stop' for k in keys]
-            curved = interp == 'smooth' and tr in CURVED[self.kind]
+            curved = interp == 'smooth' and tr in CURVED[kind]
             self.tracks.append((tr, ThingTrack(times, values, stops, curved, interp)))
 
     def pose(self, t):
@@ -299,6 +302,120 @@ def place_meshes(sc, posed):
         m['pl'] = placement(mf, o.get('scale', 1), o.get('rotate', (0, 0, 0)), T, o.get('up', 'y'))
 
 
+# ---------------------------------------------------------------- area lights (tracer.md "Area lights")
+# mesh_reference's light loop has no sphere or rect lights; scenes with them (and only ambient
+# lights beside them) are lit by this loop, which knows the frame, pixel and sample index k.
+def sobol2(g):
+    out, v, i = 0, 1 << 31, 0
+    while g >> i:
+        if (g >> i) & 1:
+            out ^= v
+        v ^= v >> 1
+        i += 1
+    return out
+
+
+class AreaScene(mr.Scene):
+    def __init__(self, d):
+        super().__init__(dict(d, lights=[]))
+        self.lights = []
+        col = lambda o, k: tuple(map(float, o.get(k, (0, 0, 0))))
+        for ell, l in enumerate(d['lights']):
+            (kind, o), = l.items()
+            if kind == 'ambient':
+                self.lights.append(dict(kind='ambient', a=tuple(map(float, o['color']))))
+                continue
+            li = dict(kind=kind, ell=ell, m=int(o.get('samples', 16)), ia=col(o, 'ambient'), id=col(o, 'diffuse'), is_=col(o, 'specular'))
+            if kind == 'sphere':
+                li.update(C=tuple(map(float, o['center'])), R=float(o['radius']))
+            elif kind == 'rect':
+                c, u, v = (tuple(map(float, o[k])) for k in ('corner', 'edge_u', 'edge_v'))
+                li.update(c=c, u=u, v=v, n=normalize(mr.cross(u, v)))
+            else:
+                raise NotImplementedError('area-light scenes take sphere, rect and ambient lights')
+            self.lights.append(li)
+        self.ctx = (0, 0, 0)  # (frame, pixel, k) of the sample being traced
+
+    def light_sum(self, P, N, d, mat, origin, leaving):
+        add, sub, had, vmul, dot = mr.add, mr.sub, mr.had, mr.vmul, mr.dot
+        frame, pixel, k = self.ctx
+        local = (0.0, 0.0, 0.0)
+        for li in self.lights:
+            if li['kind'] == 'ambient':
+                local = add(local, had(mat['ka'], li['a']))
+                continue
+            local = add(local, had(mat['ka'], li['ia']))
+            if li['kind'] == 'rect':
+                if not (dot(sub(P, li['c']), li['n']) > 0):
+                    continue
+            else:
+                C, R = li['C'], li['R']
+                v = sub(C, P)
+                delta = math.sqrt((v[0] * v[0] + v[1] * v[1]) + v[2] * v[2])
+                if not (delta > R):
+                    continue
+                r = 1.0 / delta
+                w = (v[0] * r, v[1] * r, v[2] * r)
+                sg = math.copysign(1.0, w[2])
+                a = -1.0 / (sg + w[2])
+                b = (w[0] * w[1]) * a
+                e1 = (1.0 + ((sg * w[0]) * w[0]) * a, sg * b, (-sg) * w[0])
+                e2 = (b, sg + (w[1] * w[1]) * a, -w[1])
+            z = fr.mix(fr.mix(fr.mix(0x9e3779b97f4a7c15 ^ frame) ^ pixel) ^ 0xbb67ae8584caa73b)
+            h = fr.mix(z ^ li['ell'])
+            sx, sy = h >> 32, h & 0xffffffff
+            m = li['m']
+            share = 1.0 / m
+            for j in range(m):
+                g = k * m + j
+                x = (fr.rev32(g) ^ sx) * 2.0 ** -32
+                y = (sobol2(g) ^ sy) * 2.0 ** -32
+                if li['kind'] == 'rect':
+                    c, u, vv = li['c'], li['u'], li['v']
+                    q = tuple((c[i] + x * u[i]) + y * vv[i] for i in range(3))
+                else:
+                    a2, b2 = 2.0 * x - 1.0, 2.0 * y - 1.0
+                    if a2 == 0.0 and b2 == 0.0:
+                        al = be = 0.0
+                    else:
+                        q4 = math.pi / 4.0
+                        if max(a2, 0.0 - a2) > max(b2, 0.0 - b2):
+                            rr, phi = a2, q4 * (b2 / a2)
+                        else:
+                            rr, phi = b2, 2.0 * q4 - q4 * (a2 / b2)
+                        al, be = rr * math.cos(phi), rr * math.sin(phi)
+                    q = tuple(C[i] + R * ((al * e1[i]) + (be * e2[i])) for i in range(3))
+                v = sub(q, P)
+                dist = mr.length(v)
+                if dist > 0:
+                    L = (v[0] / dist, v[1] / dist, v[2] / dist)
+                else:
+                    L, dist = (0.0, 0.0, 0.0), 0.0
+                n_l = dot(N, L)
+                if n_l <= 0:
+                    continue
+                rd = normalize(L)
+                filt = None
+                if self.transparent:
+                    filt = self.shadow_filter(origin(rd), rd, dist, leaving)
+                    if filt is None:
+                        continue
+                elif self.blocked(origin(rd), rd, dist, leaving):
+                    continue
+                H = normalize(add(L, mr.neg(d)))
+                xh = dot(N, H)
+                if xh < 0:
+                    xh = 0.0
+                if xh > 1:
+                    xh = 1.0
+                spec = fr.spec_pow(xh, mat['e'], mat['floor'])
+                term = add(vmul(had(mat['kd'], li['id']), n_l), vmul(had(mat['ks'], li['is_']), spec))
+                if filt is not None:
+                    term = had(term, filt)
+                local = add(local, vmul(term, share) if m != 1 else term)
+        return local
+
+
 # ---------------------------------------------------------------- frames (motion.md "Frames, the shutter and samples")
 def unit(b):
     return float(b >> 11) * 2.0 ** -53
@@ -331,12 +448,14 @@ class Frame:
             t = self.t if m is None else self.instants[m]
             c = camera_at(self.cams, t) if self.cams else None
             posed = posed_scene(self.d, self.things, t, c)[0]
-            self._scenes[m] = mr.Scene(posed)
+            area = any(k in l for l in posed['lights'] for k in ('sphere', 'rect'))
+            self._scenes[m] = (AreaScene if area else mr.Scene)(posed)
             place_meshes(self._scenes[m], posed)
         return self._scenes[m]
 
-    def trace(self, sc, i, j, u, v):
+    def trace(self, sc, i, j, u, v, k=0):
         W, H = self.W, self.H
+        sc.ctx = (self.n, i * W + j, k)
         x = -1.0 + (2.0 * (j + u)) / W
         y = ((1.0 - (2.0 * (i + v)) / H) * H) / W
         dd = normalize(mr.add(mr.add(sc.fwd, mr.smul(x * sc.s, sc.right)), mr.smul(y * sc.s, sc.up_c)))
@@ -365,7 +484,7 @@ class Frame:
                         h = fr.mix(seed ^ k)
                         u = ((k % k2) + unit(h)) / k2
                         v = ((k // k2) + unit(fr.mix(h))) / k2
-                    acc = mr.add(acc, self.trace(sc, i, j, u, v))
+                    acc = mr.add(acc, self.trace(sc, i, j, u, v, k))
                 img[i, j] = acc if n == 1 else tuple(c / n for c in acc)
         return img
 
@@ -373,7 +492,7 @@ class Frame:
         """Sample k of a film frame: Sobol' (u, v, a, b, τ); the scene posed at instant m."""
         x = fr.sobol_point(k, seeds)
         m = min(int(x[4] * 256.0), 255)
-        return self.trace(self.scene(m), i, j, x[0], x[1])
+        return self.trace(self.scene(m), i, j, x[0], x[1], k)
 
     def lone_sample(self, i, j):
         """The lone sample of a one-sample film frame: offset (0.5, 0.5), τ = random3's first."""
@@ -518,12 +637,26 @@ PLACED = [
      'keys': [{'time': 0}, {'time': 2, 'translate': [0.3, 0.2, -1.5], 'ease': 'stop'}]},
 ]
 
+# area lights with keys: a sphere light's centre (curved), radius and colour, a rect light's
+# corner (curved; its edges stay) and colours
+AREA_LIGHTS = [
+    {'sphere': {'center': [-2, 4, 3], 'radius': 0.6, 'ambient': [0.1, 0.1, 0.1], 'diffuse': [0.9, 0.9, 0.8], 'specular': [1, 1, 1], 'samples': 4},
+     'keys': [{'time': 0}, {'time': 1, 'center': [0.5, 3, 2], 'radius': 1.2, 'diffuse': [0.5, 0.6, 1]},
+              {'time': 2, 'center': [2.5, 4, 1], 'radius': 0.3}]},
+    {'rect': {'corner': [1, 3, -1], 'edge_u': [1.2, 0, 0], 'edge_v': [0, -0.3, 1.2], 'diffuse': [0.6, 0.4, 0.3], 'specular': [0.5, 0.5, 0.5], 'samples': 3},
+     'keys': [{'time': 0.5}, {'time': 1.5, 'corner': [-2, 2.5, 0], 'specular': [1, 0.2, 0.2], 'ambient': [0.05, 0, 0]}]},
+    {'ambient': {'color': [0.03, 0.03, 0.04]}},
+]
+
 CASES = {
     # name: (scene, frames)
     'spheres': (case(SPHERES, max_depth=3), [0, 4, 6, 17, 30, 52, 71, 80, 96]),
     'lights': (case(STILL_OBJECTS, lights=LIGHTS_KEYED), [0, 6, 24, 30, 41, 48]),
     'meshes': (case(MESHES, w=40, h=24), [0, 7, 18, 30, 48]),
     'placed': (case(PLACED, w=40, h=24), [0, 17, 30, 44]),
+    'area': (case(STILL_OBJECTS, lights=AREA_LIGHTS, w=40, h=24), [0, 18, 30, 48]),
+    # a rect light sweeping under an open shutter: each sample's points at its own instant, k
+    'area_blur': (case(STILL_OBJECTS, lights=AREA_LIGHTS, w=32, h=18, shutter=180, samples=4, denoise=False), [20]),
     'blur': (case(BLUR, w=40, h=24, shutter=180, samples=4, denoise=False), [5, 6]),
     'blur_filter': (case(BLUR, w=40, h=24, shutter=180, samples=4), [6]),
     'blur_rounds': (case(BLUR, w=32, h=18, shutter=270, shutter_offset=0.5, samples=2,
