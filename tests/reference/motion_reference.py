@@ -11,9 +11,12 @@
 #     adaptive sampling and the film filter.
 # What it adds (motion.md): keys -> key values (carried over, first key from the still thing,
 # normals and directions normalised, numbers as (r, 0, 0), a spot's angles one track), key
-# times (`time: x`, `time: a/b`, `frame: n`), the thing at time t, the shutter's 256 instants
-# and which frames become film frames because things move while the shutter is open, each
-# sample traced in the scene posed at its own instant.
+# times (`time: x`, `time: a/b`, `frame: n`, fractional fps and first_frame), the thing at time
+# t (a mesh's up axis and origin offset included), the shutter's 256 instants and which frames
+# become film frames because things (or the camera) move while the shutter is open, each sample
+# traced in the scene posed at its own instant; and, since mesh_reference has none, sphere and
+# rect area lights (tracer.md "Area lights"), keyed like the others. f32.md: a frame whose
+# things move while the shutter is open is traced in f64, so `blur_f32` must equal f64 bytes.
 #
 # Where the docs leave an f64 operation order open (tracks' formulas), this file states the
 # reading it takes (READINGS below); pixels cannot tell those apart (a pose an ulp off moves an
@@ -23,7 +26,7 @@
 #   writes motion/CASE.yaml; with RAYREEL=path/to/rayreel it renders each case's frames with
 #   rayreel and compares every channel byte of the 8-bit PNG and, with the OpenEXR module,
 #   every byte of the 32-bit float EXR values; the last line is `total: E/N channel bytes equal`.
-import copy, json, math, os, re, struct, subprocess, sys, tempfile
+import copy, json, math, os, re, shutil, subprocess, sys, tempfile
 import numpy as np
 from PIL import Image
 
@@ -114,10 +117,25 @@ def key_value(track, key, previous):
     return vec(key[track])
 
 
-def key_time(key, fps, first_frame=0):
+class Clock:
+    """timeline.md "Frames": `fps` a number or a fraction num/den, `first_frame`."""
+    def __init__(self, tl):
+        fps = tl.get('fps', 24)
+        self.first = int(tl.get('first_frame', 0))
+        self.frac = (fps.a, fps.b) if isinstance(fps, Frac) else None
+        self.rate = float(fps.a) / float(fps.b) if self.frac else float(fps)  # one f64, as frame counts use it
+
+    def time(self, n):
+        i = n - self.first
+        if self.frac:
+            return (float(i) * float(self.frac[1])) / float(self.frac[0])
+        return float(i) / self.rate
+
+
+def key_time(key, clock):
     """timeline.md "Inputs": `time: x`, `time: a/b` (one f64 division), `frame: n`."""
     if 'frame' in key:
-        return float(key['frame'] - first_frame) / fps
+        return clock.time(key['frame'])
     x = key['time']
     if isinstance(x, Frac):
         return float(x.a) / float(x.b)
@@ -171,7 +189,7 @@ class ThingTrack(cr.Track):
 
 class Thing:
     """One object or light with keys: its tracks through the key values."""
-    def __init__(self, tag, index, entry, fps, default_interp):
+    def __init__(self, tag, index, entry, clock, default_interp):
         (self.kind, self.still), = [(k, v) for k, v in entry.items() if k not in ('keys', 'interpolation')]
         self.tag, self.index = tag, index
         kind = 'light:' + self.kind if tag == 1 and self.kind in ('sphere', 'rect') else self.kind
@@ -186,7 +204,7 @@ class Thing:
                 if any(fields.get(f) == tr for f in k):
                     prev = key_value(tr, k, prev)
                 values.append(prev)
-            times = [key_time(k, fps) for k in keys]
+            times = [key_time(k, clock) for k in keys]
             stops = [k.get('ease', 'pass') == 'stop' for k in keys]
             curved = interp == 'smooth' and tr in CURVED[kind]
             self.tracks.append((tr, ThingTrack(times, values, stops, curved, interp)))
@@ -209,14 +227,14 @@ class Thing:
 
 def things_of(d):
     tl = d.get('timeline', {})
-    fps = float(tl.get('fps', 24))
+    clock = Clock(tl)
     interp = tl.get('interpolation', 'smooth')
     out = []
     for tag, group in ((0, 'objects'), (1, 'lights')):
         for i, e in enumerate(d[group]):
             if 'keys' in e:
-                out.append(Thing(tag, i, e, fps, interp))
-    return out, fps
+                out.append(Thing(tag, i, e, clock, interp))
+    return out, clock
 
 
 def posed_scene(d, things, t, camera=None):
@@ -235,7 +253,7 @@ def posed_scene(d, things, t, camera=None):
     return s, poses
 
 
-def camera_tracks(d, fps):
+def camera_tracks(d, clock):
     """timeline.md: a keyframed camera's position, look_at, up and fov tracks (keys carried
     over, the first from `camera:`, up normalised), or None for a still `camera:`."""
     tl = d.get('timeline', {})
@@ -251,7 +269,7 @@ def camera_tracks(d, fps):
             if f in k:
                 prev[f] = [float(k['fov']), 0.0, 0.0] if f == 'fov' else vec(k[f])
             values[f].append(list(normalize(prev[f])) if f == 'up' else prev[f])
-    times = [key_time(k, fps) for k in keys]
+    times = [key_time(k, clock) for k in keys]
     stops = [k.get('ease', 'pass') == 'stop' for k in keys]
     interp = tl.get('interpolation', 'smooth')
     return {f: ThingTrack(times, values[f], stops, interp == 'smooth' and f != 'fov', interp) for f in values}
@@ -424,18 +442,18 @@ def unit(b):
 class Frame:
     def __init__(self, d, n):
         self.d, self.n = d, n
-        self.things, self.fps = things_of(d)
+        self.things, self.clock = things_of(d)
         r = d['render']
         self.W, self.H = r['width'], r['height']
-        self.t = float(n) / self.fps  # timeline.md "Frames" (first_frame 0)
-        self.cams = camera_tracks(d, self.fps)
+        self.t = self.clock.time(n)  # n as the timeline numbers it (from first_frame)
+        self.cams = camera_tracks(d, self.clock)
         cam = lambda x: camera_at(self.cams, x) if self.cams else None
         self.scene_t, self.pose_t = posed_scene(d, self.things, self.t, cam(self.t))
         self.pose_t = (self.pose_t, cam(self.t))
         self.instants = None
         theta = float(r.get('shutter', 0))
         if theta > 0:
-            delta = (theta / 360.0) / self.fps
+            delta = (theta / 360.0) / self.clock.rate
             o = float(r.get('shutter_offset', 0))
             tm = [self.t + delta * ((o - 0.5) + (m + 0.5) / 256.0) for m in range(256)]
             if any((posed_scene(d, self.things, x)[1], cam(x)) != self.pose_t for x in tm):
@@ -637,6 +655,14 @@ PLACED = [
      'keys': [{'time': 0}, {'time': 2, 'translate': [0.3, 0.2, -1.5], 'ease': 'stop'}]},
 ]
 
+NTSC = [
+    FLOOR,
+    {'sphere': {'center': [-1.5, -0.2, 0], 'radius': 0.5, 'material': 'clay'},
+     'keys': [{'frame': 1005, 'center': [-1.6, 0, 0.3]},
+              {'frame': 1040, 'center': [-0.3, 0.5, -0.4], 'radius': 0.7},
+              {'time': Frac(71, 24), 'center': [0.9, 0.1, 0.6], 'radius': 0.4},
+              {'frame': 1100, 'center': [1.7, -0.3, -0.2]}]},
+]
 # area lights with keys: a sphere light's centre (curved), radius and colour, a rect light's
 # corner (curved; its edges stay) and colours
 AREA_LIGHTS = [
@@ -662,6 +688,7 @@ CASES = {
     'blur_rounds': (case(BLUR, w=32, h=18, shutter=270, shutter_offset=0.5, samples=2,
                          adaptive={'threshold': 0.05, 'max_samples': 8}, denoise=False), [5]),
     'blur_one': (case(BLUR, w=40, h=24, shutter=180, samples=1), [6]),
+    # f32.md: things move while the shutter is open, so the frame is traced in f64
     'blur_f32': (case(BLUR, w=40, h=24, shutter=180, samples=4, denoise=False, precision='f32'), [6]),
     # no sampling set: film's default (rounds, the film filter)
     'blur_default': (case(BLUR, w=32, h=18, shutter=180, samples=None), [6]),
@@ -675,6 +702,11 @@ CASES = {
                            'keyframes': [{'time': 0, 'position': [-1, 1.2, 5], 'look_at': [-0.5, -0.1, 0]},
                                          {'time': 0.5, 'position': [1, 1.5, 4.5], 'look_at': [0.5, 0, 0], 'fov': 50}]}),
             [6]),
+    # NTSC rate and studio numbering: frame keys at ((n − 1001)·1001)/24000, a rational time
+    # key, samples seeded by the frame's own number, the shutter's interval at 24000/1001
+    'ntsc': (dict(case(NTSC, w=32, h=18, shutter=180, samples=4, denoise=False),
+                  timeline={'fps': Frac(24000, 1001), 'first_frame': 1001, 'keyframes': [{'frame': 1001}]}),
+             [1017, 1071, 1072]),
     'spin': (case(SPIN, w=40, h=24, shutter=180, samples=4, denoise=False,
                   camera={'position': [0, 1.5, 3.5], 'look_at': [0, 0, 0], 'fov': 50}), [5]),
 }
@@ -683,7 +715,7 @@ CASES = {
 def to_yaml(d):
     def flow(x):
         s = json.dumps(x, default=lambda f: '%d/%d' % (f.a, f.b))
-        return re.sub(r'"time": "(\d+)/(\d+)"', r'"time": \1/\2', s)
+        return re.sub(r'"(time|fps)": "(\d+)/(\d+)"', r'"\1": \2/\3', s)
     out = ['render: ' + flow(d['render']), 'output: out_####.png', 'camera: ' + flow(d['camera'])]
     if 'timeline' in d:
         out.append('timeline: ' + flow(d['timeline']))
@@ -717,7 +749,7 @@ def main():
             img = f.render()
             out = mr.encode_linear(img)
             tag = '%s@%d' % (name, n)
-            kind = 'film, %d things move' % len(f.things) if f.instants else 'still shutter'
+            kind = 'film: things move while the shutter is open' if f.instants else 'still'
             if not rr:
                 print(f'{tag}: rendered ({kind}; no RAYREEL to compare with)')
                 continue
@@ -744,6 +776,7 @@ def main():
                 for (a, b) in bad[:8]:
                     line += f'\n   ({a}, {b}) rayreel {got[a, b]} reference {out[a, b]}'
             print(line, flush=True)
+    shutil.rmtree(tmp, ignore_errors=True)
     if rr:
         print(f'total: {total[0]}/{total[1]} channel bytes equal')
 
