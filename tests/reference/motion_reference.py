@@ -403,33 +403,14 @@ class AreaScene(mr.Scene):
                             rr, phi = b2, 2.0 * q4 - q4 * (a2 / b2)
                         al, be = rr * math.cos(phi), rr * math.sin(phi)
                     q = tuple(C[i] + R * ((al * e1[i]) + (be * e2[i])) for i in range(3))
-                v = sub(q, P)
-                dist = mr.length(v)
-                if dist > 0:
-                    L = (v[0] / dist, v[1] / dist, v[2] / dist)
-                else:
-                    L, dist = (0.0, 0.0, 0.0), 0.0
-                n_l = dot(N, L)
-                if n_l <= 0:
-                    continue
-                rd = normalize(L)
-                filt = None
-                if self.transparent:
-                    filt = self.shadow_filter(origin(rd), rd, dist, leaving)
-                    if filt is None:
-                        continue
-                elif self.blocked(origin(rd), rd, dist, leaving):
-                    continue
-                H = normalize(add(L, mr.neg(d)))
-                xh = dot(N, H)
-                if xh < 0:
-                    xh = 0.0
-                if xh > 1:
-                    xh = 1.0
-                spec = fr.spec_pow(xh, mat['e'], mat['floor'])
-                term = add(vmul(had(mat['kd'], li['id']), n_l), vmul(had(mat['ks'], li['is_']), spec))
-                if filt is not None:
-                    term = had(term, filt)
+                # "Each point is a point light at q, exactly as above": mesh_reference's loop for
+                # one point light without ambient gives (0 + ka∘0) + term = term, or 0 when the
+                # point adds nothing (N·L ≤ 0, blocked), and local + 0 = local
+                keep, self.lights = self.lights, [dict(kind='point', q=q, ia=(0.0, 0.0, 0.0), id=li['id'], is_=li['is_'])]
+                try:
+                    term = mr.Scene.light_sum(self, P, N, d, mat, origin, leaving)
+                finally:
+                    self.lights = keep
                 local = add(local, vmul(term, share) if m != 1 else term)
         return local
 
@@ -655,14 +636,8 @@ PLACED = [
      'keys': [{'time': 0}, {'time': 2, 'translate': [0.3, 0.2, -1.5], 'ease': 'stop'}]},
 ]
 
-NTSC = [
-    FLOOR,
-    {'sphere': {'center': [-1.5, -0.2, 0], 'radius': 0.5, 'material': 'clay'},
-     'keys': [{'frame': 1005, 'center': [-1.6, 0, 0.3]},
-              {'frame': 1040, 'center': [-0.3, 0.5, -0.4], 'radius': 0.7},
-              {'time': Frac(71, 24), 'center': [0.9, 0.1, 0.6], 'radius': 0.4},
-              {'frame': 1100, 'center': [1.7, -0.3, -0.2]}]},
-]
+# the first sphere again, its frame keys renumbered from the studio's first frame 1001
+NTSC = [FLOOR, dict(SPHERES[1], keys=[dict(k, frame=k['frame'] + 1001) if 'frame' in k else k for k in SPHERES[1]['keys']])]
 # area lights with keys: a sphere light's centre (curved), radius and colour, a rect light's
 # corner (curved; its edges stay) and colours
 AREA_LIGHTS = [
