@@ -539,7 +539,7 @@ class Frame:
 
 
 # ---------------------------------------------------------------- the cases
-MATS = {k: mr.MATERIALS[k] for k in ('clay', 'blue', 'green', 'gold', 'floor', 'mirror')}
+MATS = {k: mr.MATERIALS[k] for k in ('clay', 'blue', 'green', 'gold', 'floor', 'mirror', 'glass')}
 LIGHTS = copy.deepcopy(mr.LIGHTS)
 FLOOR = {'plane': {'point': [0, -1, 0], 'normal': [0, 1, 0], 'material': 'floor'}}
 CAMERA = {'position': [0, 1.2, 5], 'look_at': [0, -0.1, 0], 'fov': 60}
@@ -615,6 +615,16 @@ BLUR = [
     {'sphere': {'center': [0.6, -0.6, 1.2], 'radius': 0.3, 'material': 'blue'},
      'keys': [{'time': 0.2, 'radius': 0.3}, {'time': 0.6, 'radius': 0.5}, {'time': 1, 'radius': 0.2}]},
 ]
+# glass trees under an open shutter: a glass sphere crossing in front of a moving mirror
+GLASS = [
+    FLOOR,
+    {'sphere': {'center': [0, 0, 1], 'radius': 0.5, 'material': 'glass'},
+     'interpolation': 'linear',
+     'keys': [{'time': 0.1, 'center': [-4, 0, 1]}, {'time': 0.4, 'center': [4, 0.3, 1]}]},
+    {'sphere': {'center': [0.3, 0.2, -1.2], 'radius': 0.8, 'material': 'mirror'},
+     'keys': [{'time': 0, 'center': [0.6, 0.2, -1.2]}, {'time': 0.5, 'center': [-0.6, 0.4, -1.4]}]},
+    {'sphere': {'center': [-1.3, -0.5, -0.3], 'radius': 0.5, 'material': 'clay'}},
+]
 SPIN = [
     FLOOR,
     {'mesh': {'file': 'arrow.obj', 'material': 'gold', 'shading': 'phong', 'scale': 1.3},
@@ -625,7 +635,7 @@ SPIN = [
 # the file's up axis under a keyed rotation (R(v_rotate)·U), and `origin: bottom` / `center`
 # under keyed translates (the offset from the unkeyed placement)
 PLACED = [
-    FLOOR,
+    dict(FLOOR, keys=[{'time': 1, 'point': [0, -1.1, 0]}]),  # one key: held at every time
     {'mesh': {'file': 'arrow.obj', 'material': 'gold', 'shading': 'flat', 'up': 'z', 'translate': [-1.2, 0, 0], 'rotate': [20, 0, 0]},
      'keys': [{'time': 0}, {'time': 1, 'rotate': [20, 180, 30]}, {'time': 2, 'rotate': [-40, 300, 30], 'ease': 'stop'}]},
     {'mesh': {'file': 'arrow.obj', 'material': 'clay', 'shading': 'phong', 'up': '-x', 'origin': 'bottom', 'scale': [0.8, 1.2, 0.9],
@@ -658,6 +668,9 @@ CASES = {
     'area': (case(STILL_OBJECTS, lights=AREA_LIGHTS, w=40, h=24), [0, 18, 30, 48]),
     # a rect light sweeping under an open shutter: each sample's points at its own instant, k
     'area_blur': (case(STILL_OBJECTS, lights=AREA_LIGHTS, w=32, h=18, shutter=180, samples=4, denoise=False), [20]),
+    # a point light sweeping and changing colour under an open shutter
+    'lights_blur': (case(STILL_OBJECTS, lights=LIGHTS_KEYED, w=32, h=18, shutter=180, samples=4, denoise=False), [12]),
+    'glass_blur': (case(GLASS, w=32, h=18, shutter=180, samples=4, denoise=False, max_depth=5), [6]),
     'blur': (case(BLUR, w=40, h=24, shutter=180, samples=4, denoise=False), [5, 6]),
     'blur_filter': (case(BLUR, w=40, h=24, shutter=180, samples=4), [6]),
     'blur_rounds': (case(BLUR, w=32, h=18, shutter=270, shutter_offset=0.5, samples=2,
