@@ -8,7 +8,8 @@
 #   - mesh_reference.py: the f64 tracer (spheres, planes, OBJ meshes and their placement,
 #     point / directional / spot / ambient lights, paths);
 #   - film_reference.py: film frames' Owen-scrambled Sobol' points and seeds, the rounds of
-#     adaptive sampling and the film filter.
+#     adaptive sampling and the film filter; with film_f32_reference.py, lens frames of a posed
+#     scene in f64 and f32 (their scene globals set to the poses at t).
 # What it adds (motion.md): keys -> key values (carried over, first key from the still thing,
 # normals and directions normalised, numbers as (r, 0, 0), a spot's angles one track), key
 # times (`time: x`, `time: a/b`, `frame: n`, fractional fps and first_frame), the thing at time
@@ -35,6 +36,7 @@ sys.path.insert(0, HERE)
 import camera_reference as cr  # noqa: E402
 import film_reference as fr  # noqa: E402
 import mesh_reference as mr  # noqa: E402
+import importlib  # noqa: E402
 from mesh_reference import normalize  # noqa: E402
 
 MOTIONDIR = os.path.join(HERE, 'motion')
@@ -50,6 +52,7 @@ def _cached_mesh_file(path):
 mr.MeshFile = _cached_mesh_file
 
 M64 = (1 << 64) - 1
+FR_SAMPLE_COLOUR = fr.sample_colour  # film_reference's own tracer, for lens frames
 
 # ---------------------------------------------------------------- readings of open points
 # Where the docs leave a choice, this file reads them so (the first reading taken; none was
@@ -544,6 +547,38 @@ class Frame:
         return img
 
 
+# ---------------------------------------------------------------- lens frames of posed scenes
+def render_lens(d, n):
+    """A frame with a lens (aperture > 0, no shutter) of a posed scene, by film_reference.py (f64)
+    or film_f32_reference.py (`precision: f32`): their scene globals are set to the scene posed
+    at the frame's time (spheres and planes, point lights, black background, film's default
+    sampling for a lens: 4 samples, rounds up to 64 at 0.035, the film filter)."""
+    f = Frame(d, n)
+    assert f.instants is None and 'samples' not in d['render']
+    sc = f.scene(None)
+    cam = d['camera']
+    fr.W, fr.H, fr.FRAME, fr.MAX_DEPTH = f.W, f.H, n, sc.max_depth
+    fr.CAM_POS, fr.FWD, fr.UPC, fr.RIGHT, fr.S = sc.pos, sc.fwd, sc.up_c, sc.right, sc.s
+    fr.RHO = 0.5 * float(cam['aperture'])
+    fr.FOCUS = fr.length(fr.sub(sc.pos, tuple(map(float, cam['look_at']))))
+    assert sc.bg == (0.0, 0.0, 0.0) and not sc.meshes
+    fr.OBJECTS = [('sphere', o['c'], o['r2'], o['m']) for o in sc.spheres] + [('plane', o['p'], o['n'], o['m']) for o in sc.planes]
+    fr.MATERIALS = {str(i): o[3] for i, o in enumerate(fr.OBJECTS)}
+    assert all(li['kind'] == 'point' for li in sc.lights)
+    fr.LIGHTS = [dict(pos=li['q'], ia=li['ia'], id=li['id'], is_=li['is_']) for li in sc.lights]
+    fr.sample_colour = FR_SAMPLE_COLOUR
+    if d['render'].get('precision') == 'f32':
+        f32 = importlib.reload(sys.modules['film_f32_reference']) if 'film_f32_reference' in sys.modules \
+            else importlib.import_module('film_f32_reference')
+        px = f32.render(4, True)
+    else:
+        px = fr.render_rounds(4, 64, 0.035)
+    img = np.zeros((f.H, f.W, 3))
+    for p, c in enumerate(px):
+        img[p // f.W, p % f.W] = c
+    return img
+
+
 # ---------------------------------------------------------------- the cases
 MATS = {k: mr.MATERIALS[k] for k in ('clay', 'blue', 'green', 'gold', 'floor', 'mirror', 'glass')}
 LIGHTS = copy.deepcopy(mr.LIGHTS)
@@ -665,6 +700,17 @@ AREA_LIGHTS = [
     {'ambient': {'color': [0.03, 0.03, 0.04]}},
 ]
 
+# a lens (film frame without a shutter), still in f32: the poses at t, then f32.md's
+# camera-relative rounding; the same frame in f64
+LENS = [
+    FLOOR,
+    SPHERES[1],
+    {'sphere': {'center': [1.0, -0.5, -0.6], 'radius': 0.5, 'material': 'blue'},
+     'keys': [{'time': 0.5, 'radius': 0.3}, {'time': 2, 'radius': 0.6, 'center': [0.8, -0.4, -1]}]},
+]
+LENS_LIGHTS = [LIGHTS_KEYED[0]]
+LENS_CAMERA = dict(CAMERA, aperture=0.12)
+
 CASES = {
     # name: (scene, frames)
     'spheres': (case(SPHERES, max_depth=3), [0, 4, 6, 17, 30, 52, 71, 80, 96]),
@@ -677,6 +723,9 @@ CASES = {
     # a point light sweeping and changing colour under an open shutter
     'lights_blur': (case(STILL_OBJECTS, lights=LIGHTS_KEYED, w=32, h=18, shutter=180, samples=4, denoise=False), [12]),
     'glass_blur': (case(GLASS, w=32, h=18, shutter=180, samples=4, denoise=False, max_depth=5), [6]),
+    'lens': (case(LENS, lights=LENS_LIGHTS, camera=LENS_CAMERA, w=32, h=18, samples=None, background=[0, 0, 0]), [30]),
+    'lens_f32': (case(LENS, lights=LENS_LIGHTS, camera=LENS_CAMERA, w=32, h=18, samples=None, background=[0, 0, 0],
+                      precision='f32'), [30]),
     'blur': (case(BLUR, w=40, h=24, shutter=180, samples=4, denoise=False), [5, 6]),
     'blur_filter': (case(BLUR, w=40, h=24, shutter=180, samples=4), [6]),
     'blur_rounds': (case(BLUR, w=32, h=18, shutter=270, shutter_offset=0.5, samples=2,
@@ -740,7 +789,7 @@ def main():
         open(ypath, 'w').write(to_yaml(d))
         for n in frames:
             f = Frame(d, n)
-            img = f.render()
+            img = render_lens(d, n) if 'aperture' in d['camera'] else f.render()
             out = mr.encode_linear(img)
             tag = '%s@%d' % (name, n)
             kind = 'film: things move while the shutter is open' if f.instants else 'still'
