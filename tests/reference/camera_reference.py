@@ -5,7 +5,7 @@
 # Usage: python3 camera_reference.py SEQUENCE.yaml > OUT.csv   (needs PyYAML)
 # It differs from rayreel on purpose where the text leaves a choice: it finds the arc-length
 # parameter by bisection rather than Newton steps, and sums in its own order.
-import math, sys, yaml
+import math, sys
 
 NODES = [0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363]
 WEIGHTS = [0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763]
@@ -136,6 +136,7 @@ class Track:
         return self.place(k, s), rate
 
 def main(path):
+    import yaml  # here, so that importing the tracks needs no PyYAML
     seq = yaml.safe_load(open(path))
     tl, cam = seq['timeline'], seq.get('camera') or {}
     fps = float(tl.get('fps', 24)); smooth = tl.get('interpolation', 'smooth') == 'smooth'
@@ -176,4 +177,5 @@ def main(path):
         cells = [n, t, *p, *l, *u, f[0], speed, d]
         print(",".join(repr(float(c)) if i else str(c) for i, c in enumerate(cells)))
 
-main(sys.argv[1])
+if __name__ == '__main__':  # importable: motion_reference.py uses its tracks
+    main(sys.argv[1])
