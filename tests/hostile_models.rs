@@ -537,3 +537,60 @@ fn a_model_whose_hierarchy_cannot_fit_is_refused_before_the_probe() {
     }
     panic!("no limit up to 2 GB let check measure the job");
 }
+
+/// A PLY face index of `1.5` was reported "out of range"; a second `format` line replaced
+/// the first; OBJ numbers `nan`, `inf` and `1e999` were taken (a NaN texture coordinate
+/// rendered with exit 0, a NaN normal silently became the face's). Each is now refused with
+/// the file, the line or row, and the field.
+#[test]
+fn non_integer_indices_second_formats_and_non_finite_numbers_are_refused() {
+    let tmp = scratch("model-messages");
+    let ply = |extra: &str, face: &str| {
+        format!(
+            "ply\nformat ascii 1.0\n{extra}element vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 {face}\n"
+        )
+    };
+    let cases: [(&str, String, &str); 7] = [
+        (
+            "index.ply",
+            ply("", "1\n3 0 1.5 2"),
+            "index.ply: face 0: vertex index 1.5 is not a whole number",
+        ),
+        (
+            "format.ply",
+            ply("format binary_little_endian 1.0\n", "1\n3 0 1 2"),
+            "format.ply: header line 3: a second `format` line (the first is header line 2)",
+        ),
+        (
+            "normal.ply",
+            ply("", "nan\n3 0 1 2"),
+            "normal.ply: vertex 2: `nz` is not a finite number (got NaN)",
+        ),
+        (
+            "v.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n".into(),
+            "v.obj: line 3: `v` coordinate 2 is not a finite number (got `nan`)",
+        ),
+        (
+            "vn.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 inf\nf 1//1 2//1 3//1\n".into(),
+            "vn.obj: line 4: `vn` coordinate 3 is not a finite number (got `inf`)",
+        ),
+        (
+            "vt.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 1e999 0\nf 1/1 2/1 3/1\n".into(),
+            "vt.obj: line 4: `vt` coordinate 1 is not a finite number (got `1e999`)",
+        ),
+        (
+            "big.ply",
+            ply("", "1\n3 0 1 4294967296"),
+            "big.ply: face 0: vertex index 4294967296 is out of range (3 vertices)",
+        ),
+    ];
+    for (file, text, said) in cases {
+        let (code, _, err) = check_model(&tmp, file, text.as_bytes());
+        assert_eq!(code, Some(2), "{file}: {err}");
+        assert!(err.contains(said), "{file}: {err}");
+        assert!(err.contains("objects[0].mesh.file"), "{file}: {err}");
+    }
+}
