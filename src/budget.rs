@@ -14,9 +14,15 @@
 /// the triangles 104 (the f32 one 52); while building, 28 for the boxes and the nodes twice.
 pub(crate) const HIERARCHY_BYTES_PER_TRIANGLE: u64 = 160;
 
-/// What a mesh of `triangles` triangles adds once its hierarchy is built.
-pub(crate) fn hierarchy_bytes(triangles: u64) -> u64 {
-    triangles.saturating_mul(HIERARCHY_BYTES_PER_TRIANGLE)
+/// Bytes a triangle's f32 copy takes (`tracer::bvh::Tri32`), made beside the f64 one.
+pub(crate) const F32_COPY_BYTES_PER_TRIANGLE: u64 = 52;
+
+/// What a mesh of `triangles` triangles adds once its hierarchy is built and its triangles
+/// copied in f64, and in f32 too for an f32 job (`both`): its frames that f32 cannot resolve
+/// or whose things move, and its compositing passes, are traced in f64.
+pub(crate) fn hierarchy_bytes(triangles: u64, both: bool) -> u64 {
+    let each = HIERARCHY_BYTES_PER_TRIANGLE + u64::from(both) * F32_COPY_BYTES_PER_TRIANGLE;
+    triangles.saturating_mul(each)
 }
 
 /// Room kept free under every limit for what no check counts (small vectors, the allocator's
@@ -25,7 +31,7 @@ const HEADROOM: u64 = 32 << 20;
 
 /// What the process may still take: the tightest limit, less `HEADROOM`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Free {
+pub struct Free {
     pub(crate) bytes: u64,
     /// The limit that decides it, in words (`RLIMIT_AS (ulimit -v)`).
     pub(crate) limit: &'static str,
@@ -62,7 +68,7 @@ pub(crate) fn free(reserved_address_space: u64) -> Option<Free> {
 /// Why something could not be given memory: what it was, and the figures.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("not enough memory for {what}: it needs about {} more, and only {} is free under {} of {}{}", size(*need), size(free.bytes), free.limit, size(free.of), taken.as_ref().map(|t| format!(" ({t})")).unwrap_or_default())]
-pub(crate) struct OutOfMemory {
+pub struct OutOfMemory {
     pub(crate) what: String,
     pub(crate) need: u64,
     pub(crate) free: Free,
@@ -101,16 +107,22 @@ pub(crate) fn grow<T>(
         admit(bytes, &what)?;
     }
     v.try_reserve_exact(wanted - v.len())
-        .map_err(|_| OutOfMemory {
-            what: what(),
-            need: bytes,
-            free: free(0).unwrap_or(Free {
-                bytes: 0,
-                limit: "the allocator",
-                of: 0,
-            }),
-            taken: None,
-        })
+        .map_err(|_| refused(bytes, what()))
+}
+
+/// The allocator refused `need` bytes for `what` (after the budget admitted them, or for
+/// what it does not look at): the figures as the budget reads them now.
+pub(crate) fn refused(need: u64, what: String) -> OutOfMemory {
+    OutOfMemory {
+        what,
+        need,
+        free: free(0).unwrap_or(Free {
+            bytes: 0,
+            limit: "the allocator",
+            of: 0,
+        }),
+        taken: None,
+    }
 }
 
 /// `3.22 GB`, `153.2 MB`, `12.3 kB`, `512 bytes`: SI units, three significant figures or so,

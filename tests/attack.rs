@@ -617,7 +617,8 @@ timeline: {{ fps: 24, keyframes: [ {{ time: 0 }}, {{ time: 30 }} ] }}
     std::fs::write(tmp.join("nested.yaml"), yaml).unwrap();
     let check = run_in(&tmp, &["check", "nested.yaml"]);
     assert!(check.status.success(), "{}", stderr(&check));
-    let summary = String::from_utf8_lossy(&check.stdout).into_owned();
+    // `check` wraps lines past 120 columns under the summary's indent.
+    let summary = String::from_utf8_lossy(&check.stdout).replace("\n              ", " ");
     // 640×360 pixels × 4 samples × (1 + 1 light) × 1024 surfaces, for 721 frames: the bound
     // beside the measured estimate.
     let frame = 640.0 * 360.0 * 4.0 * 2.0 * 1024.0;

@@ -98,6 +98,8 @@ fn legal_models_from_other_readers_load_with_notes() {
     for (file, bytes, want) in cases {
         let (code, said, err) = check_model(&tmp, file, &bytes);
         assert_eq!(code, Some(0), "{file}: {err}");
+        // `check` wraps lines past 120 columns under the summary's indent.
+        let said = said.replace("\n              ", " ");
         assert!(said.contains(want), "{file}: wanted `{want}` in\n{said}");
         let out = run_in(
             &tmp,
@@ -509,12 +511,26 @@ fn a_model_whose_hierarchy_cannot_fit_is_refused_before_the_probe() {
     let tmp = scratch("hierarchy-memory");
     ply_grid(&tmp.join("grid.ply"), 708);
     std::fs::write(tmp.join("seq.yaml"), placing("grid.ply", "")).unwrap();
-    let mut refused_before_probe = false;
-    for mb in (200..=2000).step_by(50) {
-        let out = sh(
-            &tmp,
-            &format!("prlimit --as={mb}000000 \"$RAYREEL\" check seq.yaml"),
-        );
+    until_it_fits(
+        &tmp,
+        (200..=2000).step_by(50),
+        |mb| format!("prlimit --as={mb}000000 \"$RAYREEL\" check seq.yaml"),
+        "not enough memory for the meshes' hierarchies and triangle copies (999698 triangles): they need about 160.0 MB",
+    );
+}
+
+/// Runs `command(mb)` at each limit in `limits` (MB) until it succeeds: every run before
+/// ends with exit 1 and "not enough memory", never an abort or a panic, and one of them said
+/// `wanted`. Returns the limit that let it succeed.
+fn until_it_fits(
+    dir: &Path,
+    limits: impl Iterator<Item = u64>,
+    command: impl Fn(u64) -> String,
+    wanted: &str,
+) -> u64 {
+    let mut said_wanted = false;
+    for mb in limits {
+        let out = sh(dir, &command(mb));
         let err = stderr(&out);
         assert!(
             !err.contains("memory allocation") && !err.contains("panicked"),
@@ -522,18 +538,98 @@ fn a_model_whose_hierarchy_cannot_fit_is_refused_before_the_probe() {
         );
         match out.status.code() {
             Some(0) => {
-                assert!(
-                    refused_before_probe,
-                    "{mb} MB: never refused before the probe"
-                );
-                return;
+                assert!(said_wanted, "{mb} MB: never refused with `{wanted}`");
+                return mb;
             }
-            Some(1) => assert!(err.contains("not enough memory for "), "{mb} MB: {err}"),
+            Some(1) => assert!(err.contains("not enough memory"), "{mb} MB: {err}"),
             code => panic!("{mb} MB: exit {code:?}: {err}"),
         }
-        refused_before_probe |= err.contains(
-            "not enough memory for the meshes' hierarchies and triangle copies (999698 triangles): they need about 160.0 MB",
-        );
+        said_wanted |= err.contains(wanted);
     }
-    panic!("no limit up to 2 GB let check measure the job");
+    panic!("no limit let `{}` succeed", command(0));
+}
+
+/// An f32 job whose compositing passes are traced in f64 builds both copies of a mesh's
+/// triangles, where only one was counted, and both copies and the hierarchy were allocated
+/// without a way to fail. Both are now counted (212 bytes a triangle: hierarchy, f64 and f32
+/// copies) and allocated fallibly: raising the limit, each run is refused with the figures
+/// (exit 1) until one renders, never an abort.
+#[test]
+fn an_f32_job_counts_both_triangle_copies_and_never_aborts() {
+    if !have_tool("prlimit") {
+        return;
+    }
+    let tmp = scratch("hierarchy-both-copies");
+    ply_grid(&tmp.join("grid.ply"), 301);
+    let yaml = placing("grid.ply", "").replace("samples: 1 }", "samples: 1, precision: f32 }");
+    std::fs::write(tmp.join("seq.yaml"), yaml).unwrap();
+    // 180000 triangles × 212 bytes.
+    let mb = until_it_fits(
+        &tmp,
+        (150..=2000).step_by(25),
+        |mb| {
+            format!(
+                "prlimit --as={mb}000000 \"$RAYREEL\" render seq.yaml -q --threads 2 --aov normal -o f{mb}.exr"
+            )
+        },
+        "beside 38.2 MB for the meshes' hierarchies",
+    );
+    assert!(files(&tmp).contains(&format!("f{mb}.exr")));
+}
+
+/// A PLY face index of `1.5` was reported "out of range"; a second `format` line replaced
+/// the first; OBJ numbers `nan`, `inf` and `1e999` were taken (a NaN texture coordinate
+/// rendered with exit 0, a NaN normal silently became the face's). Each is now refused with
+/// the file, the line or row, and the field.
+#[test]
+fn non_integer_indices_second_formats_and_non_finite_numbers_are_refused() {
+    let tmp = scratch("model-messages");
+    let ply = |extra: &str, face: &str| {
+        format!(
+            "ply\nformat ascii 1.0\n{extra}element vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 {face}\n"
+        )
+    };
+    let cases: [(&str, String, &str); 7] = [
+        (
+            "index.ply",
+            ply("", "1\n3 0 1.5 2"),
+            "index.ply: face 0: vertex index 1.5 is not a whole number",
+        ),
+        (
+            "format.ply",
+            ply("format binary_little_endian 1.0\n", "1\n3 0 1 2"),
+            "format.ply: header line 3: a second `format` line (the first is header line 2)",
+        ),
+        (
+            "normal.ply",
+            ply("", "nan\n3 0 1 2"),
+            "normal.ply: vertex 2: `nz` is not a finite number (got NaN)",
+        ),
+        (
+            "v.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n".into(),
+            "v.obj: line 3: `v` coordinate 2 is not a finite number (got `nan`)",
+        ),
+        (
+            "vn.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 inf\nf 1//1 2//1 3//1\n".into(),
+            "vn.obj: line 4: `vn` coordinate 3 is not a finite number (got `inf`)",
+        ),
+        (
+            "vt.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 1e999 0\nf 1/1 2/1 3/1\n".into(),
+            "vt.obj: line 4: `vt` coordinate 1 is not a finite number (got `1e999`)",
+        ),
+        (
+            "big.ply",
+            ply("", "1\n3 0 1 4294967296"),
+            "big.ply: face 0: vertex index 4294967296 is out of range (3 vertices)",
+        ),
+    ];
+    for (file, text, said) in cases {
+        let (code, _, err) = check_model(&tmp, file, text.as_bytes());
+        assert_eq!(code, Some(2), "{file}: {err}");
+        assert!(err.contains(said), "{file}: {err}");
+        assert!(err.contains("objects[0].mesh.file"), "{file}: {err}");
+    }
 }

@@ -34,18 +34,35 @@ pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
                 .ok()
         });
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let (cost, warning) = cost(
+    let cost = cost(
         &seq,
         &frames,
         cores,
         format.as_ref(),
         &format!("\n{INDENT}"),
     )?;
-    for w in warning.into_iter().chain(super::grain::warning(&seq)) {
-        eprintln!("{w}");
+    for w in cost
+        .warning
+        .iter()
+        .cloned()
+        .chain(super::grain::warning(&seq))
+    {
+        for line in super::screen::wrap(&w, "  ").lines() {
+            eprintln!("{line}");
+        }
     }
-    let summary = summary(&shown(&args.file), &seq, screen).map_err(Error::Failed)?;
-    out(&format!("{summary}  cost:       {cost}\n"))
+    let built = cost.hierarchies.as_deref();
+    let summary = summary(&shown(&args.file), &seq, screen, built).map_err(Error::Failed)?;
+    let text = format!("{summary}  cost:       {}\n", cost.line);
+    out(&super::screen::wrap(&text, INDENT))
+}
+
+/// What `cost` found: the line, a warning for a long job, and the meshes' hierarchies as
+/// its probe built them (`None` when it did not probe).
+pub(crate) struct Cost {
+    pub(crate) line: String,
+    pub(crate) warning: Option<String>,
+    pub(crate) hierarchies: Option<Vec<super::meshes::Built>>,
 }
 
 /// Where a summary's continuation lines start (under the values after `  objects:    `).
@@ -100,14 +117,18 @@ pub(crate) fn cost(
     threads: usize,
     format: Option<&FileFormat>,
     join: &str,
-) -> Result<(String, Option<String>), Error> {
+) -> Result<Cost, Error> {
     let n = frames.len();
     if n == 0 {
-        return Ok(("nothing to render".into(), None));
+        return Ok(Cost {
+            line: "nothing to render".into(),
+            warning: None,
+            hierarchies: None,
+        });
     }
     // The probe builds the meshes' hierarchies and triangle copies, as a run would: refused
     // here with the figures when they cannot fit, where the allocation once aborted (exit 134).
-    crate::schedule::memory::admit_hierarchies(&seq.scene, threads).map_err(Error::Failed)?;
+    crate::schedule::memory::admit_hierarchies(seq, threads).map_err(Error::Failed)?;
     let rays = rays_per_frame(seq) * n as f64;
     let bound = format!(
         "at most {rays:.2e} rays (an upper bound: pixels × samples × (1 + {}) × {})",
@@ -121,8 +142,14 @@ pub(crate) fn cost(
         }
     );
     let frames_text = super::render::plural(n, "frame");
-    let Some(e) = estimate::estimate(seq, frames, threads, format) else {
-        return Ok((format!("{frames_text}: {bound}"), None));
+    let probed = estimate::estimate(seq, frames, threads, format)
+        .map_err(|e| Error::Failed(e.to_string()))?;
+    let Some(e) = probed else {
+        return Ok(Cost {
+            line: format!("{frames_text}: {bound}"),
+            warning: None,
+            hierarchies: None,
+        });
     };
     let about = match e.lower_bound {
         true => format!("at least {}", estimate::duration(e.seconds)),
@@ -135,22 +162,32 @@ pub(crate) fn cost(
             e.basis
         )
     });
-    Ok((line, warning))
+    Ok(Cost {
+        line,
+        warning,
+        hierarchies: Some(e.hierarchies),
+    })
 }
 
-/// The one-screen description `rayreel check` prints (everything with `--full`); an error
-/// when a mesh's hierarchy, built to be measured, does not fit in memory.
-pub(crate) fn summary(file: &str, seq: &Sequence, screen: Screen) -> Result<String, String> {
+/// The one-screen description `rayreel check` prints (everything with `--full`), with the
+/// meshes' hierarchies as `built` (measured by the cost probe); an error when a hierarchy
+/// built here to be measured does not fit in memory.
+pub(crate) fn summary(
+    file: &str,
+    seq: &Sequence,
+    screen: Screen,
+    built: Option<&[super::meshes::Built]>,
+) -> Result<String, String> {
     let (scene, s) = (&seq.scene, &seq.settings);
     Ok(format!(
         "{file}: ok\n  objects:    {}\n{}  materials:  {}\n{}{}  lights:     {}\n{}  resolution: {}x{}, max_depth {}\n  picture:    {}\n  frames:     {}\n{}{}{}  output:     {}\n",
         objects(scene),
-        super::meshes::summary(scene, screen)?,
+        super::meshes::summary(scene, screen, built)?,
         scene.materials.len(),
         textures(scene, screen),
         sky(scene),
         lights(scene),
-        penumbra_notes(scene, s, screen),
+        penumbra_notes(scene, s),
         s.width,
         s.height,
         s.max_depth,
@@ -211,12 +248,23 @@ fn textures(scene: &Scene, screen: Screen) -> String {
             }
         }
     }
+    // Past the first few, the largest first, and the others summed up.
+    let held = |i: &Image| i.levels.iter().map(|l| l.texels.len()).sum::<usize>() * 12;
+    if !screen.full && images.len() > super::screen::SHOWN {
+        images.sort_by_key(|i| std::cmp::Reverse(held(i)));
+    }
     let lines: Vec<String> = images
         .iter()
         .take(screen.keep(images.len()))
         .map(|i| format!("  texture:    {}", image_line(i, "")))
         .collect();
-    let mut out = screen.lines(&lines, images.len(), "              ", "texture images");
+    let counted = format!(
+        "texture images, {} in all: {:.1} MiB, read in {:.3} s",
+        images.len(),
+        images.iter().map(|i| held(i)).sum::<usize>() as f64 / (1u64 << 20) as f64,
+        images.iter().map(|i| i.load_seconds).sum::<f64>()
+    );
+    let mut out = screen.lines(&lines, images.len(), "              ", &counted);
     if checkers > 0 {
         out += &format!(
             "  texture:    {} (box-filtered over each ray's footprint)\n",
@@ -261,7 +309,7 @@ fn image_line(i: &Image, what: &str) -> String {
     let texels: usize = i.levels.iter().map(|l| l.texels.len()).sum();
     format!(
         "{} {}x{}{what}, {} mip levels, {:.1} MiB, read in {:.3} s",
-        printable(&i.file.to_string_lossy()),
+        super::screen::short_name(&i.file.to_string_lossy()),
         l0.width,
         l0.height,
         i.levels.len(),
@@ -350,44 +398,54 @@ fn list(items: &[String]) -> String {
 /// a visible fraction to about 1/64 in the worst case, a couple of 8-bit levels in sRGB.
 pub(crate) const QUIET_PENUMBRA: u64 = 64;
 
-/// A note under `lights:` for each kind and count of area lights whose points per pixel,
+/// A note under `lights:` for each kind of area light (sphere, rect) whose points per pixel,
 /// `samples` × the pixel samples every pixel gets (`render.samples`; adaptive passes add more
-/// only where they see noise), are below `QUIET_PENUMBRA`: one note for all the lights that
-/// share them (`lights[0-999] (sphere)`).
-fn penumbra_notes(scene: &Scene, s: &Settings, screen: Screen) -> String {
-    let mut groups: Vec<((usize, u32), Vec<usize>)> = Vec::new();
-    for (i, l) in scene.lights.iter().enumerate() {
-        let Some(m) = l.area_samples() else { continue };
-        if u64::from(m) * u64::from(s.samples) >= QUIET_PENUMBRA {
-            continue;
+/// only where they see noise), are below `QUIET_PENUMBRA`: one note for all the lights of
+/// that kind (`lights[0-999] (sphere)`), with their count of samples when they share one,
+/// else the range of their points.
+fn penumbra_notes(scene: &Scene, s: &Settings) -> String {
+    let mut out = String::new();
+    for (kind, name) in [(4, "sphere"), (5, "rect")] {
+        let (mut noisy, mut samples) = (Vec::new(), Vec::new());
+        for (i, l) in scene.lights.iter().enumerate() {
+            let Some(m) = l.area_samples().filter(|_| kind_index(l) == kind) else {
+                continue;
+            };
+            if u64::from(m) * u64::from(s.samples) < QUIET_PENUMBRA {
+                noisy.push(i);
+                samples.push(m);
+            }
         }
-        let key = (kind_index(l), m);
-        match groups.iter_mut().find(|(k, _)| *k == key) {
-            Some((_, lights)) => lights.push(i),
-            None => groups.push((key, vec![i])),
+        if let (Some(&least), Some(&most)) = (samples.iter().min(), samples.iter().max()) {
+            out += &penumbra_note(&noisy, name, (least, most), s.samples);
         }
     }
-    let notes: Vec<String> = groups
-        .iter()
-        .map(|((kind, m), lights)| {
-            let points = u64::from(*m) * u64::from(s.samples);
-            let kind = if *kind == 4 { "sphere" } else { "rect" };
-            let (its, raise) = match lights.len() {
-                1 => ("its", "its samples"),
-                _ => ("their", "their samples"),
-            };
-            format!(
-                "              note: lights[{}] ({kind}): {m} samples × {} = {points} points on the light per pixel, under {QUIET_PENUMBRA}: {its} soft shadows will be noisy; raise {raise} or render.samples",
-                runs(lights),
-                noun(f64::from(s.samples), "pixel sample"),
-            )
-        })
-        .collect();
-    screen.lines(
-        &notes,
-        notes.len(),
-        "              ",
-        "notes on area lights",
+    out
+}
+
+/// The note on the `lights` of kind `name` whose samples run from `least` to `most`, at
+/// `pixel` samples a pixel.
+fn penumbra_note(lights: &[usize], name: &str, (least, most): (u32, u32), pixel: u32) -> String {
+    let per_pixel = |m: u32| u64::from(m) * u64::from(pixel);
+    let pixel_samples = noun(f64::from(pixel), "pixel sample");
+    let (its, raise) = match lights.len() {
+        1 => ("its", "its samples"),
+        _ => ("their", "their samples"),
+    };
+    let points = match least == most {
+        true => format!(
+            "{least} samples × {pixel_samples} = {} points on the light per pixel",
+            per_pixel(least)
+        ),
+        false => format!(
+            "{} to {} points on the light per pixel ({raise} × {pixel_samples})",
+            per_pixel(least),
+            per_pixel(most)
+        ),
+    };
+    format!(
+        "              note: lights[{}] ({name}): {points}, under {QUIET_PENUMBRA}: {its} soft shadows will be noisy; raise {raise} or render.samples\n",
+        runs(lights),
     )
 }
 

@@ -9,6 +9,7 @@
 //! width, so it holds what that part of the frame holds, at the frame's pixel density.
 
 use super::render::plural;
+use crate::budget::OutOfMemory;
 use crate::camera::Camera;
 use crate::frameset::FrameSet;
 use crate::output::{Expected, FileFormat, RunIdentity};
@@ -46,23 +47,26 @@ pub(crate) struct Estimate {
     pub(crate) basis: String,
     /// The probe was stopped: the real figure is larger.
     pub(crate) lower_bound: bool,
+    /// Each mesh's hierarchy as the probe built it: bytes (nodes, order and the triangle
+    /// copies made) and seconds, in the scene's order (`check` prints them).
+    pub(crate) hierarchies: Vec<(usize, f64)>,
 }
 
 /// Measures `frames` of `seq` on `threads` threads, written as `format` (None: not written
-/// to files). None when there is nothing to render or no frame has a camera.
+/// to files). None when there is nothing to render or no frame has a camera; an error when
+/// the system refuses the memory of a mesh's hierarchy or triangle copies.
 pub(crate) fn estimate(
     seq: &Sequence,
     frames: &FrameSet,
     threads: usize,
     format: Option<&FileFormat>,
-) -> Option<Estimate> {
+) -> Result<Option<Estimate>, OutOfMemory> {
     if frames.is_empty() {
-        return None;
+        return Ok(None);
     }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .ok()?;
+    let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(threads).build() else {
+        return Ok(None);
+    };
     pool.install(|| measure(seq, frames, threads, format))
 }
 
@@ -71,22 +75,33 @@ fn measure(
     frames: &FrameSet,
     threads: usize,
     format: Option<&FileFormat>,
-) -> Option<Estimate> {
+) -> Result<Option<Estimate>, OutOfMemory> {
     let started = Instant::now();
     // Loading the file, its meshes and images (as this command just did), then the world.
     let loaded = super::STARTED
         .get()
         .map_or(0.0, |t| t.elapsed().as_secs_f64());
-    let world = World::new(seq.scene.clone());
+    let world = World::try_new(seq.scene.clone())?;
     let setup = loaded + started.elapsed().as_secs_f64();
     let probed = probe_frames(seq, frames);
-    let first = probed.first()?;
+    let Some(first) = probed.first() else {
+        return Ok(None);
+    };
     let s = &seq.settings;
     let stop = Arc::new(AtomicBool::new(false));
     let watchdog = Watchdog::start(&stop);
+    // The first refusal of a triangle copy's memory, which stops the probe.
+    let refused = std::sync::Mutex::new(None);
     let timed = |tile: Tile, (n, e): &(u64, Exposure)| {
         let t = Instant::now();
-        let done = render_tile(&world, s, e, *n, tile, &stop).is_some();
+        let done = match render_tile(&world, s, e, *n, tile, &stop) {
+            Ok(done) => done.is_some(),
+            Err(e) => {
+                stop.store(true, Ordering::Relaxed);
+                *refused.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+                false
+            }
+        };
         (t.elapsed().as_secs_f64(), done)
     };
     // A one-pixel frame is what every frame costs besides its pixels; a small tile then
@@ -119,6 +134,9 @@ fn measure(
     };
     let stopped = probe.stopped || stop.load(Ordering::Relaxed);
     drop(watchdog);
+    if let Some(e) = refused.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        return Err(e);
+    }
     let (w, h) = (f64::from(s.width), f64::from(s.height));
     let render = overhead + probe.seconds_a_pixel * w * h;
     let encode = format.map_or(0.0, |f| encode_seconds(seq, f, first.0));
@@ -148,11 +166,15 @@ fn measure(
             None => "",
         }
     );
-    Some(Estimate {
+    let hierarchies = (world.hierarchies().iter())
+        .map(|b| (b.bytes(), b.seconds))
+        .collect();
+    Ok(Some(Estimate {
         seconds: setup + per_frame * frames.len() as f64,
         basis,
         lower_bound: stopped,
-    })
+        hierarchies,
+    }))
 }
 
 /// What the rounds of tiles found: seconds a pixel of a frame on every thread (the mean over
@@ -316,7 +338,7 @@ fn render_tile(
     n: u64,
     tile: Tile,
     stop: &AtomicBool,
-) -> Option<()> {
+) -> Result<Option<()>, OutOfMemory> {
     let settings = Settings {
         width: tile.w,
         height: tile.h,
@@ -331,7 +353,7 @@ fn render_tile(
             .collect(),
         motion: exposure.motion.clone(),
     };
-    tracer::render_or_stop(world, &turned, &settings, n, stop).map(|_| ())
+    tracer::render_or_stop(world, &turned, &settings, n, stop).map(|f| f.map(|_| ()))
 }
 
 /// `c` turned towards the centre of `tile` of a `s.width` × `s.height` frame, its field of

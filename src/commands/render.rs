@@ -401,7 +401,11 @@ fn print_dry_run(
         true => None,
         false => files.map(|f| &f.format),
     };
-    let (cost, warning) = super::check::cost(seq, &rendering, threads, format, " ")?;
+    let super::check::Cost {
+        line: cost,
+        warning,
+        ..
+    } = super::check::cost(seq, &rendering, threads, format, " ")?;
     if let Some(w) = warning {
         crate::console::warning(&w);
     }

@@ -1,8 +1,9 @@
 //! What keeps `check` on one screen for any scene: every list it prints (mesh files, their
 //! placements, textures, area lights' notes, warnings) shows its first few items and counts
 //! the rest, saying that `rayreel check --full` lists them all; lists of numbers are grouped
-//! (`1000 sphere (16 samples)`). Text quoted from model files is cut short where it is read
-//! (`sequence::mesh::quoted`).
+//! (`1000 sphere (16 samples)`); mesh files and texture images past the first few are summed
+//! up, with the largest. Long file names are cut (`short_name`), lines wrapped at `WIDTH`.
+//! Text quoted from model files is cut short where it is read (`sequence::mesh::quoted`).
 
 /// Items a list shows before it counts the rest.
 pub(crate) const SHOWN: usize = 4;
@@ -43,6 +44,56 @@ impl Screen {
         }
         out
     }
+}
+
+/// Columns a summary line takes at most: `wrap` breaks longer ones.
+pub(crate) const WIDTH: usize = 120;
+/// Characters a file name takes at most in a summary line: a longer one keeps its tail.
+pub(crate) const NAME: usize = 56;
+
+/// `name` made printable and, past `NAME` characters, cut: its folders first (`…/`), then
+/// the middle of the file's own name, whose start and end are what tell files apart
+/// (`…/model_number_000_expo…_with_a_long_name.obj`).
+pub(crate) fn short_name(name: &str) -> String {
+    let name = crate::console::printable(name);
+    let chars: Vec<char> = name.chars().collect();
+    if chars.len() <= NAME {
+        return name.into_owned();
+    }
+    let own = chars.iter().rposition(|&c| c == '/').map_or(0, |i| i + 1);
+    let file = &chars[own..];
+    let prefix = if own > 0 { "…/" } else { "" };
+    let room = NAME - prefix.chars().count();
+    if file.len() <= room {
+        return format!("{prefix}{}", file.iter().collect::<String>());
+    }
+    let head = (room - 1) / 2;
+    let tail = room - 1 - head;
+    let start: String = file[..head].iter().collect();
+    let end: String = file[file.len() - tail..].iter().collect();
+    format!("{prefix}{start}…{end}")
+}
+
+/// `text` with every line longer than `WIDTH` columns broken at its last space that fits,
+/// the rest going on under `indent` (a word longer than a line stays whole).
+pub(crate) fn wrap(text: &str, indent: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for line in text.lines() {
+        let mut rest = line.to_string();
+        while rest.chars().count() > WIDTH {
+            let fits: String = rest.chars().take(WIDTH + 1).collect();
+            let floor = indent.len() + 1;
+            let Some(at) = fits.rfind(' ').filter(|&at| at > floor) else {
+                break;
+            };
+            out.push_str(rest[..at].trim_end());
+            out.push('\n');
+            rest = format!("{indent}{}", rest[at + 1..].trim_start());
+        }
+        out.push_str(&rest);
+        out.push('\n');
+    }
+    out
 }
 
 /// Counts of equal values, in order of first appearance: `[16, 16, 64]` → `[(16, 2), (64, 1)]`.
@@ -99,6 +150,34 @@ mod tests {
         assert_eq!(four.lines().count(), 4);
         let made = Screen { full: false }.lines(&items[..3], 10, "  ", "items");
         assert_eq!(made, short);
+    }
+
+    #[test]
+    fn long_lines_wrap_and_long_names_keep_their_tail() {
+        let long = format!("  note: {}", "word ".repeat(60));
+        let wrapped = wrap(&long, "        ");
+        assert!(
+            wrapped.lines().all(|l| l.chars().count() <= WIDTH),
+            "{wrapped}"
+        );
+        assert_eq!(wrapped.split_whitespace().count(), 61);
+        assert!(
+            wrapped
+                .lines()
+                .skip(1)
+                .all(|l| l.starts_with("        word"))
+        );
+        assert_eq!(wrap("short\n", "  "), "short\n");
+        let name = format!("{}/model.obj", "d".repeat(100));
+        assert_eq!(short_name(&name), "…/model.obj");
+        let name = format!("models/model_007_{}_long_name.obj", "x".repeat(100));
+        let cut = short_name(&name);
+        assert_eq!(cut.chars().count(), NAME);
+        assert!(
+            cut.starts_with("…/model_007_x") && cut.ends_with("x_long_name.obj"),
+            "{cut}"
+        );
+        assert_eq!(short_name("a.obj"), "a.obj");
     }
 
     #[test]

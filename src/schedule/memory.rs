@@ -13,21 +13,19 @@
 //! bytes (at most the channels again: ZIP never doubles them); PNG's or the stream's integer
 //! samples and the file's bytes. What may be used is the budget's figure (`crate::budget`: the
 //! smallest of the cgroup's memory.max less its memory.current, RLIMIT_AS less the process's
-//! address space now, and MemAvailable), with the address space each worker thread reserves
-//! for its arena and stack kept aside under RLIMIT_AS, less the meshes' hierarchies, which the
-//! run builds after this check.
+//! address space now, and MemAvailable), with the address space of the allocator arenas that
+//! threads may still add kept aside under RLIMIT_AS, less the meshes' hierarchies and triangle
+//! copies, which the run builds after this check.
 
 use crate::budget::{self, Free, size};
 use crate::output::{ExrPrecision, FileFormat};
 use crate::settings::Settings;
 
 /// Address space a thread's malloc arena reserves (glibc, 64-bit: HEAP_MAX_SIZE, 64 MiB; mapped
-/// as twice that for a moment while it is aligned, which `reserved` keeps once). Threads'
-/// stacks are not counted: the workers are started before the check, so theirs are in the
-/// address space the budget reads already, as is the main thread's arena.
+/// as twice that for a moment while it is aligned, which `arenas_to_come` keeps once).
+/// Threads' stacks are not counted: a run's workers are started before the check, so theirs
+/// are in the address space the budget reads already, as are the arenas the process has.
 const ARENA: u64 = 64 << 20;
-/// The threads a run has besides its workers (main, stream, signals, progress).
-const OTHER_THREADS: u64 = 4;
 /// Room kept for everything else: buffers of rows in flight, the encoders' own.
 const SLACK: u64 = 128 << 20;
 
@@ -54,31 +52,78 @@ pub(crate) fn frame_bytes(settings: &Settings, format: Option<FileFormat>) -> u6
     pixels * (render + encode)
 }
 
-/// What the process may take for a run of `threads` workers: the budget's figure with the
-/// address space their stacks and arenas reserve kept aside, and `SLACK` under every limit.
-pub(crate) fn available(threads: usize) -> Option<Free> {
-    let reserved = reserved(threads);
-    budget::free(reserved).map(|f| Free {
+/// The malloc arenas threads still to start (or not yet allocating) may add, and the address
+/// space they reserve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Arenas {
+    pub(crate) count: u64,
+    pub(crate) bytes: u64,
+}
+
+/// The arenas `threads` more threads may add to those the process has: glibc gives a thread
+/// that allocates an arena of its own until there are 8 a core (M_ARENA_MAX's default on
+/// 64-bit, cores as online CPUs, the main thread's arena among them); threads beyond share
+/// them. Arenas present (glibc's `malloc_info` counts them) are in the address space the
+/// budget reads already, so they are not counted again. It once kept an arena for each
+/// worker already running and for 4 other threads a run may not start: 32 threads of a 32×24
+/// frame were refused under 2 GB, where the process peaks at 1.13 GB (VmPeak, 2 cores).
+pub(crate) fn arenas_to_come(threads: u64) -> Arenas {
+    // SAFETY: sysconf reads a system value and has no preconditions.
+    let online = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) }.max(1) as u64;
+    let cap = 8 * online;
+    let now = arenas_now().unwrap_or(1).clamp(1, cap);
+    let count = (now + threads).min(cap) - now;
+    Arenas {
+        count,
+        bytes: ARENA * (count + u64::from(count > 0)),
+    }
+}
+
+/// How many malloc arenas the process has (glibc: one `<heap>` in `malloc_info`'s report
+/// each); None where that cannot be read, and then only the main thread's is taken as there.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn arenas_now() -> Option<u64> {
+    let mut buffer: *mut libc::c_char = std::ptr::null_mut();
+    let mut len: libc::size_t = 0;
+    // SAFETY: open_memstream writes the buffer's address and length into the two locals,
+    // which outlive the stream; malloc_info writes into the stream, and after fclose the
+    // buffer holds `len` bytes, read once and then freed with the allocator that made it.
+    unsafe {
+        let stream = libc::open_memstream(&mut buffer, &mut len);
+        if stream.is_null() {
+            return None;
+        }
+        let written = libc::malloc_info(0, stream);
+        libc::fclose(stream);
+        if buffer.is_null() {
+            return None;
+        }
+        let text = std::slice::from_raw_parts(buffer as *const u8, len);
+        let heaps = text.windows(10).filter(|w| w == b"<heap nr=\"").count() as u64;
+        libc::free(buffer.cast());
+        (written == 0 && heaps > 0).then_some(heaps)
+    }
+}
+
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn arenas_now() -> Option<u64> {
+    None
+}
+
+/// The threads a process has now (`Threads:` in /proc/self/status), the calling one among them.
+pub(crate) fn threads_now() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find_map(|l| l.strip_prefix("Threads:"))?;
+    line.trim().parse().ok()
+}
+
+/// What the process may take for a run: the budget's figure with the address space the
+/// `arenas` still to come reserve kept aside, and `SLACK` under every limit.
+pub(crate) fn available(arenas: Arenas) -> Option<Free> {
+    budget::free(arenas.bytes).map(|f| Free {
         bytes: f.bytes.saturating_sub(SLACK),
         ..f
     })
-}
-
-/// The address space the run's threads' arenas reserve beyond the frames: glibc makes at most
-/// 8 arenas a core (M_ARENA_MAX's default on 64-bit, cores as online CPUs), the main thread's
-/// among them, and threads beyond share them. It once kept 136 MiB for each thread, stacks
-/// counted twice and arenas beyond glibc's cap: a 32×24 frame whose process peaks at 144 MB
-/// (VmPeak, --threads 1) was refused under 800 MB, one peaking at 1.12 GB with 32 threads
-/// on 2 cores under 4 GB.
-fn reserved(threads: usize) -> u64 {
-    arenas(threads as u64 + OTHER_THREADS)
-}
-
-/// The address space the arenas of `threads` threads besides the main one may add.
-fn arenas(threads: u64) -> u64 {
-    // SAFETY: sysconf reads a system value and has no preconditions.
-    let online = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) }.max(1) as u64;
-    ARENA * (threads.min(8 * online - 1) + 1)
 }
 
 /// How many of `window` frames fit in `available` bytes beside `fixed` bytes the run needs
@@ -87,7 +132,7 @@ pub(crate) fn fit(
     window: usize,
     per_frame: u64,
     fixed: u64,
-    threads: usize,
+    arenas: Arenas,
     available: Option<Free>,
 ) -> Result<usize, String> {
     let Some(free) = available else {
@@ -102,7 +147,7 @@ pub(crate) fn fit(
         0 => String::new(),
         n => format!(" beside {} for the meshes' hierarchies", size(n)),
     };
-    let kept = kept(&free, reserved(threads), threads as u64 + OTHER_THREADS);
+    let kept = kept(&free, arenas);
     Err(format!(
         "one frame needs about {} (rendered, then encoded){hierarchies}, and only {} is free under {} of {}{kept}; render a smaller size (--size), fewer channels, or raise the limit",
         size(per_frame),
@@ -112,44 +157,52 @@ pub(crate) fn fit(
     ))
 }
 
-/// `, once … is kept for N threads' allocator arenas` under RLIMIT_AS, where it is.
-fn kept(free: &Free, reserved: u64, threads: u64) -> String {
-    match free.limit.starts_with("RLIMIT_AS") {
+/// `, once … is kept for N more allocator arenas` under RLIMIT_AS, where some are.
+fn kept(free: &Free, arenas: Arenas) -> String {
+    match free.limit.starts_with("RLIMIT_AS") && arenas.count > 0 {
         true => format!(
-            ", once {} of address space is kept for {threads} threads' allocator arenas",
-            size(reserved)
+            ", once {} of address space is kept for {} more allocator arena{}",
+            size(arenas.bytes),
+            arenas.count,
+            if arenas.count == 1 { "" } else { "s" }
         ),
         false => String::new(),
     }
 }
 
-/// The bytes the hierarchies of the scene's meshes will take once built (the run builds them
-/// after this check).
-pub(crate) fn hierarchies(scene: &crate::scene::Scene) -> u64 {
-    scene
+/// The bytes the hierarchies of the scene's meshes and their triangle copies will take once
+/// built (the run builds them after this check): an f32 job counts both copies, since its
+/// frames that f32 cannot resolve or whose things move, and its compositing passes, are
+/// traced in f64.
+pub(crate) fn hierarchies(seq: &crate::sequence::Sequence) -> u64 {
+    let f32_job = seq.settings.precision == crate::settings::Precision::F32;
+    seq.scene
         .meshes
         .iter()
-        .map(|m| budget::hierarchy_bytes(m.triangles.len() as u64))
+        .map(|m| budget::hierarchy_bytes(m.triangles.len() as u64, f32_job))
         .sum()
 }
 
 /// `Ok` when the meshes' hierarchies (`hierarchies`) fit in what the process may take now,
 /// otherwise the figures: `check` and `render --dry-run` build them for their probe, which
-/// runs on `threads` workers.
-pub(crate) fn admit_hierarchies(scene: &crate::scene::Scene, threads: usize) -> Result<(), String> {
-    let need = hierarchies(scene);
-    // Only the probe's workers: no stream, signal or progress thread, no rows in flight.
-    let reserved = arenas(threads as u64);
-    match budget::free(reserved) {
+/// runs on `threads` new workers (and a watchdog).
+pub(crate) fn admit_hierarchies(
+    seq: &crate::sequence::Sequence,
+    threads: usize,
+) -> Result<(), String> {
+    let need = hierarchies(seq);
+    // Only the probe's threads: no stream, signal or progress thread, no rows in flight.
+    let arenas = arenas_to_come(threads as u64 + 1);
+    match budget::free(arenas.bytes) {
         Some(free) if need > free.bytes => {
-            let triangles: usize = scene.meshes.iter().map(|m| m.triangles.len()).sum();
+            let triangles: usize = seq.scene.meshes.iter().map(|m| m.triangles.len()).sum();
             Err(format!(
                 "not enough memory for the meshes' hierarchies and triangle copies ({triangles} triangles): they need about {}, and only {} is free under {} of {}{}",
                 size(need),
                 size(free.bytes),
                 free.limit,
                 size(free.of),
-                kept(&free, reserved, threads as u64)
+                kept(&free, arenas)
             ))
         }
         _ => Ok(()),
@@ -169,19 +222,39 @@ mod tests {
                 of: 16 << 30,
             })
         };
-        assert_eq!(fit(4, 1 << 30, 0, 2, free(10)), Ok(4));
-        assert_eq!(fit(4, 1 << 30, 0, 2, free(2)), Ok(2));
-        assert_eq!(fit(4, 1 << 30, 1 << 30, 2, free(2)), Ok(1));
-        assert_eq!(fit(4, 1 << 30, 0, 2, None), Ok(4));
-        let refused = fit(4, 3 << 30, 0, 2, free(2)).unwrap_err();
+        let two = Arenas {
+            count: 2,
+            bytes: 3 * ARENA,
+        };
+        assert_eq!(fit(4, 1 << 30, 0, two, free(10)), Ok(4));
+        assert_eq!(fit(4, 1 << 30, 0, two, free(2)), Ok(2));
+        assert_eq!(fit(4, 1 << 30, 1 << 30, two, free(2)), Ok(1));
+        assert_eq!(fit(4, 1 << 30, 0, two, None), Ok(4));
+        let refused = fit(4, 3 << 30, 0, two, free(2)).unwrap_err();
         assert!(
             refused.contains("3.22 GB") && refused.contains("under a limit of 17.18 GB"),
             "{refused}"
         );
-        let tiny = fit(4, 12_288, 0, 2, free(0)).unwrap_err();
+        let tiny = fit(4, 12_288, 0, two, free(0)).unwrap_err();
         assert!(
             tiny.contains("about 12.3 kB") && tiny.contains("only 0 bytes"),
             "{tiny}"
         );
+    }
+
+    #[test]
+    fn arenas_present_are_not_counted_again() {
+        // This process has the main thread's arena at least, and the test harness's threads'.
+        assert!(arenas_now().is_none_or(|n| n >= 1));
+        let none = arenas_to_come(0);
+        assert_eq!(none, Arenas { count: 0, bytes: 0 });
+        let one = arenas_to_come(1);
+        assert!(one.count <= 1 && one.bytes == ARENA * (one.count + one.count.min(1)));
+        // However many threads, no more than glibc's cap of 8 a core in all.
+        // SAFETY: as in `arenas_to_come`.
+        let online = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) }.max(1) as u64;
+        let many = arenas_to_come(10_000);
+        assert!(many.count < 8 * online);
+        assert_eq!(many.bytes, ARENA * (many.count + u64::from(many.count > 0)));
     }
 }

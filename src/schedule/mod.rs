@@ -102,6 +102,9 @@ pub enum RunError {
     Stream(std::io::Error),
     #[error("not enough memory: {0}")]
     Memory(String),
+    /// The system refused memory the budget admitted (or does not look at), named.
+    #[error(transparent)]
+    Allocation(#[from] crate::budget::OutOfMemory),
     #[error("worker lost: {0}")]
     WorkerLost(mpsc::RecvTimeoutError),
 }
@@ -111,10 +114,11 @@ pub enum RunError {
 fn memory_window(batch: &Batch, window: usize, progress: &Progress) -> Result<usize, RunError> {
     let format = batch.files.as_ref().map(|f| f.format);
     let per_frame = memory::frame_bytes(&batch.sequence.settings, format);
-    let hierarchies = memory::hierarchies(&batch.sequence.scene);
-    let available = memory::available(batch.threads);
-    let fits = memory::fit(window, per_frame, hierarchies, batch.threads, available)
-        .map_err(RunError::Memory)?;
+    let hierarchies = memory::hierarchies(&batch.sequence);
+    let arenas = memory::arenas_to_come(threads_to_come(batch));
+    let available = memory::available(arenas);
+    let fits =
+        memory::fit(window, per_frame, hierarchies, arenas, available).map_err(RunError::Memory)?;
     if let (true, Some(free)) = (fits < window, available) {
         progress.note(&format!(
             "note: {fits} frame{} at a time instead of {window}: each needs about {} and {} is free under {}",
@@ -125,6 +129,16 @@ fn memory_window(batch: &Batch, window: usize, progress: &Progress) -> Result<us
         ));
     }
     Ok(fits)
+}
+
+/// Threads that may still take an allocator arena of their own once the workers have theirs
+/// (`run_on` has each allocate first): those running besides the workers and this one (a
+/// progress bar's ticker, the reader of ffmpeg's messages), which may not have allocated yet,
+/// and the stream's writer, started later.
+fn threads_to_come(batch: &Batch) -> u64 {
+    let running = memory::threads_now().unwrap_or(0);
+    let others = running.saturating_sub(1 + batch.threads as u64);
+    others + u64::from(batch.stream.is_some())
 }
 
 /// How often the run looks at signals, claims and workers.
@@ -154,6 +168,9 @@ pub(crate) fn run_on(
     progress: &mut Progress,
 ) -> Result<Outcome, RunError> {
     return_frame_buffers_to_the_os();
+    // Each worker allocates once, so that its allocator arena is in the address space the
+    // memory check reads rather than one it must keep room for.
+    pool.broadcast(|_| drop(std::hint::black_box(Box::new(0u64))));
     let window = match batch.stream {
         // A stream has its order to keep: one frame rendering (on every thread) while the one
         // before is written keeps memory to two frames whatever the reader does.
@@ -167,7 +184,7 @@ pub(crate) fn run_on(
         .take()
         .unwrap_or_else(|| Box::new(std::io::stdout()));
     let mut d = Delivery::new(&batch, progress, out);
-    let renderer = renderer(&batch, &d.cancel, tx);
+    let renderer = renderer(&batch, &d.cancel, tx)?;
     let mut pending = batch.tasks.iter().copied();
     let mut in_flight = 0;
     loop {
@@ -203,26 +220,26 @@ fn renderer(
     batch: &Batch,
     cancel: &Arc<AtomicBool>,
     tx: mpsc::Sender<(u64, Produced)>,
-) -> Arc<Renderer> {
+) -> Result<Arc<Renderer>, RunError> {
     let seq = Arc::clone(&batch.sequence);
     let files = (batch.files.clone()).map(|f| {
         let identity = RunIdentity::new(&seq, &f.format);
         (f, identity)
     });
-    Arc::new(Renderer {
-        world: World::new(seq.scene.clone()),
+    Ok(Arc::new(Renderer {
+        world: World::try_new(seq.scene.clone())?,
         seq,
         files,
         stream: batch.stream,
         cancel: Arc::clone(cancel),
         results: tx,
         queue: Mutex::new(Default::default()),
-    })
+    }))
 }
 
 /// Renders frame `n` of the sequence (building its geometry; a run builds it once).
 pub fn render_frame(seq: &Sequence, n: u64) -> Result<Frame, RunError> {
-    render_with(&World::new(seq.scene.clone()), seq, n, &seq.settings)
+    render_with(&World::try_new(seq.scene.clone())?, seq, n, &seq.settings)
 }
 
 /// Renders frame `n` in `world` (built once from the sequence's scene) with `settings`.
@@ -247,8 +264,9 @@ pub(crate) fn render_seeded(
     let view = settings.frame_view(&seq.timeline, n);
     let exposure =
         (view.exposure.as_ref()).map_err(|&source| RunError::Camera { frame: n, source })?;
-    let mut frame = tracer::render(world, exposure, settings, seed);
     let never = std::sync::atomic::AtomicBool::new(false);
+    let mut frame =
+        tracer::render_or_stop(world, exposure, settings, seed, &never)?.expect("never stopped");
     if !settings.aov.is_empty() {
         frame.aov = tracer::aov::render(
             &world.at_frame(exposure),

@@ -83,7 +83,7 @@ impl Renderer {
             (view.exposure.as_ref()).map_err(|&source| RunError::Camera { frame: n, source })?;
         let settings = &self.seq.settings;
         let Some(mut frame) =
-            tracer::render_or_stop(&self.world, exposure, settings, n, &self.cancel)
+            tracer::render_or_stop(&self.world, exposure, settings, n, &self.cancel)?
         else {
             return Ok(None);
         };

@@ -26,6 +26,7 @@ pub mod sobol;
 pub mod texture;
 mod triangle;
 
+use crate::budget::OutOfMemory;
 use crate::frame::Frame;
 use crate::scene::Scene;
 pub use crate::settings::{Adaptive, Precision, Sampler, Settings};
@@ -68,13 +69,29 @@ pub struct World {
 }
 
 impl World {
+    /// The world of `scene`, its meshes' hierarchies built; where the system refuses their
+    /// memory this panics (the run, `check` and the probe use `try_new`, which says so).
     pub fn new(scene: Scene) -> World {
-        let bvhs: Vec<Arc<bvh::Bvh>> = scene
-            .meshes
-            .iter()
-            .map(|m| Arc::new(bvh::Bvh::build(m)))
-            .collect();
-        World::with_bvhs(scene, bvhs)
+        World::try_new(scene).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// The world of `scene`, or which mesh's hierarchy the system refused memory for.
+    pub(crate) fn try_new(scene: Scene) -> Result<World, OutOfMemory> {
+        let bvhs = (scene.meshes.iter())
+            .map(|m| bvh::Bvh::build(m).map(Arc::new))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(World::with_bvhs(scene, bvhs))
+    }
+
+    /// Makes the meshes' triangle copies a frame traced in `precision` tests (each once).
+    pub(crate) fn prepare(&self, precision: Precision) -> Result<(), OutOfMemory> {
+        let single = precision == Precision::F32;
+        self.bvhs.iter().try_for_each(|b| b.prepare(single))
+    }
+
+    /// The hierarchy of each of `scene.meshes`, in order.
+    pub(crate) fn hierarchies(&self) -> &[Arc<bvh::Bvh>] {
+        &self.bvhs
     }
 
     /// The world of `scene`, whose meshes' hierarchies are `bvhs`.
@@ -187,20 +204,22 @@ fn clear(scene: &Scene, bvhs: &[Arc<bvh::Bvh>]) -> Vec<glass::Clear> {
         .collect()
 }
 
-/// Frame number `frame` of `world` seen with `exposure`'s cameras.
+/// Frame number `frame` of `world` seen with `exposure`'s cameras (panics where the system
+/// refuses the memory of a mesh's triangle copy: tools and tests; runs use `render_or_stop`).
 pub fn render(world: &World, exposure: &Exposure, settings: &Settings, frame: u64) -> Frame {
     render_with(Kernel::chosen(), world, exposure, settings, frame)
 }
 
-/// `render`, given up (`None`) as soon as `stop` is set: it is checked before each band of
-/// rows, each packet and each sample, so even a frame of hours stops within milliseconds.
-pub fn render_or_stop(
+/// `render`, given up (`Ok(None)`) as soon as `stop` is set: it is checked before each band
+/// of rows, each packet and each sample, so even a frame of hours stops within milliseconds;
+/// an error when the system refuses the memory of a mesh's triangle copy.
+pub(crate) fn render_or_stop(
     world: &World,
     exposure: &Exposure,
     settings: &Settings,
     frame: u64,
     stop: &AtomicBool,
-) -> Option<Frame> {
+) -> Result<Option<Frame>, OutOfMemory> {
     render_frame(Kernel::chosen(), world, exposure, settings, frame, stop)
 }
 
@@ -213,7 +232,9 @@ pub fn render_with(
     frame: u64,
 ) -> Frame {
     let never = AtomicBool::new(false);
-    render_frame(kernel, world, exposure, settings, frame, &never).expect("never stopped")
+    render_frame(kernel, world, exposure, settings, frame, &never)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .expect("never stopped")
 }
 
 fn render_frame(
@@ -223,7 +244,7 @@ fn render_frame(
     settings: &Settings,
     frame: u64,
     stop: &AtomicBool,
-) -> Option<Frame> {
+) -> Result<Option<Frame>, OutOfMemory> {
     // What moves is posed: at the frame's time, and at each instant of an open shutter.
     let staged = exposure.motion.as_ref().map(|m| stage(world, m));
     let (world, instants) = match &staged {
@@ -245,6 +266,11 @@ fn render_frame(
         },
         ..*settings
     };
+    // The triangle copies this frame tests, and the passes' (traced in f64), made fallibly.
+    world.prepare(settings.precision)?;
+    if !settings.aov.is_empty() {
+        world.prepare(Precision::F64)?;
+    }
     let relative;
     let (world, exposure) = match settings.precision {
         Precision::F64 => (world, exposure),
@@ -314,9 +340,9 @@ fn render_frame(
         depth
     });
     if stop.load(Ordering::Relaxed) {
-        return None;
+        return Ok(None);
     }
-    Some(Frame {
+    Ok(Some(Frame {
         width: settings.width,
         height: settings.height,
         rgb,
@@ -327,7 +353,7 @@ fn render_frame(
         non_finite: stats.non_finite,
         samples: stats.samples,
         rays: stats.rays,
-    })
+    }))
 }
 
 /// The world at the frame's time, and at each instant of the open shutter when something

@@ -213,7 +213,7 @@ fn finish(file: &Path, soup: Soup) -> Result<Loaded, Fail> {
     let mut kept = triangles;
     kept.retain(|t| !degenerate(&positions, t));
     // What the rest takes: normals and their sums, and the hierarchy the tracer will build.
-    let later = (n as u64) * 48 + budget::hierarchy_bytes(kept.len() as u64);
+    let later = (n as u64) * 48 + budget::hierarchy_bytes(kept.len() as u64, false);
     budget::admit(later, || {
         format!(
             "its normals and hierarchy ({} triangles, {n} vertices)",

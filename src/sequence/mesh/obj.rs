@@ -331,6 +331,17 @@ fn coords<'a, const N: usize>(
                 format!("`{what}` coordinate {} is not a number (got `{w}`)", i + 1),
             )
         })?;
+        // `nan`, `inf` and `1e999` parse, but a NaN normal or texture coordinate would reach
+        // the shading, and a non-finite position only drop its triangles unseen.
+        if !o.is_finite() {
+            return Err(at(
+                line,
+                format!(
+                    "`{what}` coordinate {} is not a finite number (got `{w}`)",
+                    i + 1
+                ),
+            ));
+        }
     }
     Ok(out)
 }

@@ -197,13 +197,21 @@ fn header<R: BufRead>(input: &mut Input<R>) -> Result<Header, Fail> {
         let w: Vec<&str> = text.split_ascii_whitespace().collect();
         match w.as_slice() {
             ["end_header"] => break,
-            ["format", f, _] => format = Some(format_of(f, n)?),
+            ["format", f, _] => match format {
+                None => format = Some((format_of(f, n)?, n)),
+                Some((_, first)) => {
+                    return Err(at_line(
+                        n,
+                        format!("a second `format` line (the first is header line {first})"),
+                    ));
+                }
+            },
             ["element", name, count] => element(name, count, n, &mut elements)?,
             ["property", rest @ ..] => property(rest, n, elements.last_mut())?,
             _ => return Err(at_line(n, format!("cannot read `{}`", text.trim()))),
         }
     }
-    let Some(format) = format else {
+    let Some((format, _)) = format else {
         return Err(Fail::at("header", "no `format` line"));
     };
     Ok(Header {

@@ -170,6 +170,12 @@ pub(super) fn vertices<R: BufRead>(
             };
         }
         body.end_row("vertex", i)?;
+        finite(
+            e,
+            &values,
+            normal.iter().flatten().chain(uv.iter().flatten()),
+            i,
+        )?;
         soup.positions
             .push(DVec3::new(values[x], values[y], values[z]));
         if let Some([a, b, c]) = normal {
@@ -182,6 +188,27 @@ pub(super) fn vertices<R: BufRead>(
     soup.normals = normal.map(|_| normals);
     soup.uvs = uv.map(|_| uvs);
     Ok(())
+}
+
+/// A vertex's normal and texture coordinates (the properties at `used`) must be finite: a NaN
+/// there would reach the shading. A non-finite position only makes its triangles degenerate
+/// (skipped and counted).
+fn finite<'a>(
+    e: &Element,
+    values: &[f64],
+    mut used: impl Iterator<Item = &'a usize>,
+    i: u64,
+) -> Result<(), Fail> {
+    match used.find(|&&k| !values[k].is_finite()) {
+        None => Ok(()),
+        Some(&k) => Err(Fail::at(
+            format!("vertex {i}"),
+            format!(
+                "`{}` is not a finite number (got {})",
+                e.props[k].name, values[k]
+            ),
+        )),
+    }
 }
 
 /// The `face` element, which may come before or after `vertex`: indices are checked at once
@@ -251,11 +278,16 @@ impl Faces {
 
     /// A vertex index of face `i`: a whole number ≥ 0, below the vertex count when known.
     fn index(&mut self, v: f64, i: u64, (count, known): (f64, bool)) -> Result<(), Fail> {
-        let whole = v >= 0.0 && v.fract() == 0.0 && v <= f64::from(u32::MAX);
-        if !whole || (known && v >= count) {
+        if !(v.is_finite() && v.fract() == 0.0) {
+            return Err(Fail::at(
+                format!("face {i}"),
+                format!("vertex index {v} is not a whole number"),
+            ));
+        }
+        if v < 0.0 || v > f64::from(u32::MAX) || (known && v >= count) {
             let range = match known {
                 true => format!("{count} vertices"),
-                false => "a vertex index is a whole number, 0 or more".into(),
+                false => "a vertex index is 0 or more".into(),
             };
             return Err(Fail::at(
                 format!("face {i}"),

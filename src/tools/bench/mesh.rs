@@ -5,6 +5,7 @@
 
 use super::{BenchError, Options, load, render_only, repeat};
 use crate::scene::{Mesh, MeshShading, Object, Placement, Shape};
+use crate::schedule::RunError;
 use crate::sequence::Sequence;
 use crate::tools::meshgen;
 use crate::tracer::bvh::Bvh;
@@ -70,7 +71,8 @@ pub(super) fn meshes(o: &Options, out: &mut dyn FnMut(&str), cmd: &str) -> Resul
         let triangles = mesh.triangles.len();
         let mesh = Arc::new(mesh);
         let build = repeat(o.runs, || {
-            std::hint::black_box(Bvh::build(&mesh));
+            let built = Bvh::build(&mesh).map_err(RunError::Allocation)?;
+            std::hint::black_box(built);
             Ok(())
         })?;
         let mut line = format!(

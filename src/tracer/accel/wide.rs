@@ -16,6 +16,7 @@
 //! hierarchy"). Rays in f64 frames compare these f32 values widened exactly.
 
 use glam::{DVec3, Vec3};
+use std::collections::TryReserveError;
 
 /// Children per node.
 pub const WIDTH: usize = 4;
@@ -130,14 +131,21 @@ impl Shape {
 impl Tree {
     /// The hierarchy over `prims` (at least one), of the `chosen` shape.
     pub fn build(prims: Vec<Prim>) -> Tree {
+        Tree::try_build(prims)
+            .unwrap_or_else(|_| std::alloc::handle_alloc_error(std::alloc::Layout::new::<Node>()))
+    }
+
+    /// `build`, an error where the nodes or the order cannot be allocated (a mesh's
+    /// hierarchy: the run then says so rather than aborting).
+    pub fn try_build(prims: Vec<Prim>) -> Result<Tree, TryReserveError> {
         Tree::build_as(prims, Shape::chosen())
     }
 
     /// The hierarchy over `prims` (at least one) with nodes of `shape`.
-    pub fn build_as(mut prims: Vec<Prim>, shape: Shape) -> Tree {
+    pub fn build_as(mut prims: Vec<Prim>, shape: Shape) -> Result<Tree, TryReserveError> {
         assert!(!prims.is_empty(), "a hierarchy over nothing");
         let (lo, hi) = bounds(&prims);
-        let nodes = match node(&mut prims, lo, hi, (0, shape)) {
+        let nodes = match node(&mut prims, lo, hi, (0, shape))? {
             Child::Node(nodes) => nodes,
             Child::Leaf(_) => {
                 let (lo, hi) = padded(lo, hi);
@@ -145,12 +153,15 @@ impl Tree {
             }
         };
         let (lo, hi) = padded(lo, hi);
-        Tree {
+        let mut order = Vec::new();
+        order.try_reserve_exact(prims.len())?;
+        order.extend(prims.iter().map(|p| p.id));
+        Ok(Tree {
             nodes,
-            order: prims.iter().map(|p| p.id).collect(),
+            order,
             lo,
             hi,
-        }
+        })
     }
 
     /// Bytes the nodes and the order take.
@@ -243,7 +254,12 @@ struct Run {
 
 /// The subtree over `prims` (reordered in place), whose boxes' union is [lo, hi].
 /// `at` is the node's depth and the tree's shape.
-fn node(prims: &mut [Prim], lo: Vec3, hi: Vec3, at: (usize, Shape)) -> Child {
+fn node(
+    prims: &mut [Prim],
+    lo: Vec3,
+    hi: Vec3,
+    at: (usize, Shape),
+) -> Result<Child, TryReserveError> {
     let (depth, shape) = at;
     let whole = Run {
         start: 0,
@@ -253,7 +269,7 @@ fn node(prims: &mut [Prim], lo: Vec3, hi: Vec3, at: (usize, Shape)) -> Child {
         splits: true,
     };
     let Some((l, r)) = split(prims, &whole, at) else {
-        return Child::Leaf(prims.len());
+        return Ok(Child::Leaf(prims.len()));
     };
     // Split the largest-area child that may split until there are WIDTH of them.
     let mut runs = vec![l, r];
@@ -279,12 +295,16 @@ fn node(prims: &mut [Prim], lo: Vec3, hi: Vec3, at: (usize, Shape)) -> Child {
             None => runs[i].splits = false,
         }
     }
-    let children = build_runs(prims, &runs, (depth + 1, shape));
-    Child::Node(assemble(&runs, children))
+    let children = build_runs(prims, &runs, (depth + 1, shape))?;
+    Ok(Child::Node(assemble(&runs, children)?))
 }
 
 /// Each run's subtree, large ones in parallel.
-fn build_runs(prims: &mut [Prim], runs: &[Run], at: (usize, Shape)) -> Vec<Child> {
+fn build_runs(
+    prims: &mut [Prim],
+    runs: &[Run],
+    at: (usize, Shape),
+) -> Result<Vec<Child>, TryReserveError> {
     let mut slices = Vec::with_capacity(runs.len());
     let mut rest = prims;
     for run in runs {
@@ -294,7 +314,7 @@ fn build_runs(prims: &mut [Prim], runs: &[Run], at: (usize, Shape)) -> Vec<Child
     }
     let sub = |(s, run): (&mut [Prim], Run)| match run.splits {
         true => node(s, run.lo, run.hi, at),
-        false => Child::Leaf(s.len()),
+        false => Ok(Child::Leaf(s.len())),
     };
     if runs.iter().map(|r| r.len).sum::<usize>() < PARALLEL_BELOW {
         return slices.into_iter().map(sub).collect();
@@ -304,7 +324,7 @@ fn build_runs(prims: &mut [Prim], runs: &[Run], at: (usize, Shape)) -> Vec<Child
 }
 
 /// The node over `runs` followed by its children's subtrees.
-fn assemble(runs: &[Run], children: Vec<Child>) -> Vec<Node> {
+fn assemble(runs: &[Run], children: Vec<Child>) -> Result<Vec<Node>, TryReserveError> {
     let total: usize = children
         .iter()
         .map(|c| match c {
@@ -312,7 +332,8 @@ fn assemble(runs: &[Run], children: Vec<Child>) -> Vec<Node> {
             Child::Leaf(_) => 0,
         })
         .sum();
-    let mut nodes = Vec::with_capacity(1 + total);
+    let mut nodes = Vec::new();
+    nodes.try_reserve_exact(1 + total)?;
     let mut top = empty_node();
     top.kids = runs.len() as u32;
     nodes.push(top);
@@ -337,7 +358,7 @@ fn assemble(runs: &[Run], children: Vec<Child>) -> Vec<Node> {
             }
         }
     }
-    nodes
+    Ok(nodes)
 }
 
 /// How to split `prims` (the run `run`, starting at 0): its two parts, the first moved to
