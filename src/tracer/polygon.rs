@@ -276,7 +276,7 @@ fn normals(
     let (place, q, n, shading) = triangle(world, object, prim);
     let b = [1.0 - u - v, u, v];
     let wound = place.normal((q[1] - q[0]).cross(q[2] - q[0]));
-    let smooth = place.normal(n[0] * b[0] + n[1] * b[1] + n[2] * b[2]);
+    let smooth = smooth_or(&place, n[0] * b[0] + n[1] * b[1] + n[2] * b[2], wound);
     // The vertex normals say which side is out (a file may wind its faces either way).
     let geom = if wound.dot(smooth) < 0.0 {
         -wound
@@ -288,6 +288,19 @@ fn normals(
         MeshShading::Flat | MeshShading::Constant => geom,
     };
     (geom, shade, shading)
+}
+
+/// The placed smooth normal of the blend `sum` of vertex normals; `wound` where that is not
+/// finite: opposed vertex normals that cancel to (0, 0, 0), or nearly, normalise to NaN or
+/// infinity (docs/spec/mesh.md).
+#[inline(always)]
+fn smooth_or(place: &Placement, sum: DVec3, wound: DVec3) -> DVec3 {
+    let smooth = place.normal(sum);
+    // A finite unit vector has s·s within rounding of 1; NaN and infinities fail the test.
+    match (smooth.dot(smooth) - 1.0).abs() < 0.5 {
+        true => smooth,
+        false => wound,
+    }
 }
 
 /// Corner `i` of one lane's triangle placed, or (`normal`) its vertex normal placed.
@@ -302,5 +315,27 @@ fn corner(
     match normal {
         false => place.point(q[i]),
         true => place.normal(n[i]),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DMat3;
+
+    #[test]
+    fn cancelled_vertex_normals_fall_back_to_the_wound_normal() {
+        let place = Placement {
+            scale: DVec3::new(2.0, 1.0, 0.5),
+            rotation: DMat3::IDENTITY,
+            translate: DVec3::ZERO,
+        };
+        let wound = DVec3::Z;
+        // n0 = +y, n1 = −y, met half way along their edge: the blend is exactly 0.
+        let sum = DVec3::Y * 0.5 + DVec3::NEG_Y * 0.5;
+        assert_eq!(smooth_or(&place, sum, wound), wound);
+        assert_eq!(smooth_or(&place, DVec3::new(1e-320, 0.0, 0.0), wound), wound);
+        let s = smooth_or(&place, DVec3::new(0.0, 3.0, 0.0), wound);
+        assert_eq!(s, DVec3::Y);
     }
 }

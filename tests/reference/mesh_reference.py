@@ -637,6 +637,8 @@ class Scene:
         mix = add(add(vmul(n0, b0), vmul(n1, u)), vmul(n2, v))
         S = pl.normal(mix)
         W = pl.normal(mf.TN[k])
+        if not abs(dot(S, S) - 1.0) < 0.5:  # mesh.md: cancelled vertex normals, S = W
+            S = W
         G = neg(W) if dot(W, S) < 0 else W
         back = dot(G, d) > 0
         sh = ob['shading']
