@@ -58,6 +58,20 @@ pub(super) fn light<V: Lanes>(
     if !lit.any() {
         return;
     }
+    // Lanes whose cone towards the light meets no opaque object trace no shadow ray.
+    // `match`, not `Option::map`: a closure is compiled outside the kernel's
+    // `#[target_feature]` function, and lane operations must stay in it.
+    #[allow(clippy::manual_map)]
+    let seen = match &world.cones {
+        Some(o) => Some(super::cone::open(
+            o,
+            super::cone::ball(light),
+            at.point,
+            at.object,
+            lit,
+        )),
+        None => None,
+    };
     let share = Some(V::splat(1.0 / f64::from(m)));
     let mut block = [[[0.0; MAX_LANES]; 3]; BLOCK];
     let mut j = 0;
@@ -71,7 +85,7 @@ pub(super) fn light<V: Lanes>(
                 z: V::load(&q[2]),
             };
             let (l, d) = towards(at.point, q);
-            shine(world, s, at, lit, (l, d), &i, share, sum, rays);
+            shine(world, s, at, (lit, seen), (l, d), &i, share, sum, rays);
         }
         j += n;
     }
