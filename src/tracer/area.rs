@@ -73,29 +73,13 @@ pub(super) fn light<V: Lanes>(
         None => None,
     };
     let share = Some(V::splat(1.0 / f64::from(m)));
-    let mut block = [[[0.0; MAX_LANES]; 3]; BLOCK];
-    let mut j = 0;
-    while j < m {
-        let n = (m - j).min(BLOCK as u32);
-        points.block::<V::F64>(k * m + j, n as usize, V::N, &mut block);
-        for q in &block[..n as usize] {
-            let q = V3 {
-                x: V::load(&q[0]),
-                y: V::load(&q[1]),
-                z: V::load(&q[2]),
-            };
-            let (l, d) = towards(at.point, q);
-            shine(world, s, at, (lit, seen), (l, d), &i, share, sum, rays);
-        }
-        j += n;
+    let mut q = [[0.0; MAX_LANES]; 3];
+    for j in 0..m {
+        points.place::<V::F64>(k * m + j, V::N, &mut q);
+        let (l, d) = towards(at.point, V3::load(&q, 0));
+        shine(world, s, at, (lit, seen), (l, d), &i, share, sum, rays);
     }
 }
-
-/// Light points placed at a time, so that a light of many samples needs no large buffer.
-const BLOCK: usize = 16;
-
-/// `BLOCK` points of every lane, as f64 coordinates: [point][axis][lane].
-type Block = [[[f64; MAX_LANES]; 3]; BLOCK];
 
 /// Per axis, one f64 value per lane.
 type Axes = [[f64; MAX_LANES]; 3];
@@ -174,48 +158,40 @@ impl AreaPoints {
         }
     }
 
-    /// Points g … g + n − 1 (n ≤ `BLOCK`) of each lane's sequence on the light into
-    /// `out[..n]`, for lanes 0 … lanes − 1 (the light's centre or corner on lanes that take no
-    /// points), computed in the f64 lanes `W`, `W::N` lanes at a time.
+    /// Point g of each lane's sequence on the light into `out`, for lanes 0 … lanes − 1 (the
+    /// light's centre or corner on lanes that take no points), computed in the f64 lanes `W`,
+    /// `W::N` lanes at a time.
     #[inline(always)]
-    fn block<W: Lanes>(&self, g: u32, n: usize, lanes: usize, out: &mut Block) {
+    fn place<W: Lanes>(&self, g: u32, lanes: usize, out: &mut Axes) {
         use super::sample::{sobol02, unit32};
-        // The sequence's coordinates: integer work, lane by lane.
-        let mut xy = [[[0.0; MAX_LANES]; 2]; BLOCK];
-        for (j, c) in xy.iter_mut().enumerate().take(n) {
-            let (gx, gy) = sobol02(g + j as u32);
-            for k in 0..lanes {
-                c[0][k] = unit32(gx ^ self.shift[k].0);
-                c[1][k] = unit32(gy ^ self.shift[k].1);
-            }
-        }
+        let (gx, gy) = sobol02(g);
         for c in (0..lanes).step_by(W::N) {
             let live = W::M::from_bits(self.lanes >> c);
-            for (q, coords) in out.iter_mut().zip(&xy).take(n) {
-                let (x, y) = (W::load(&coords[0][c..]), W::load(&coords[1][c..]));
-                let (p, idle) = match &self.shape {
-                    AreaShape::Rect {
-                        corner,
-                        edge_u,
-                        edge_v,
-                    } => {
-                        let corner = V3::splat(*corner);
-                        let p = (corner + V3::splat(*edge_u) * x) + V3::splat(*edge_v) * y;
-                        (p, corner)
-                    }
-                    AreaShape::Sphere {
-                        center,
-                        radius,
-                        basis,
-                    } => {
-                        let (e1, e2) = (V3::load(&basis[0], c), V3::load(&basis[1], c));
-                        let (a, b) = super::lens::disc(x, y);
-                        let center = V3::splat(*center);
-                        (center + (e1 * a + e2 * b) * W::splat(*radius), center)
-                    }
-                };
-                V3::select(live, p, idle).store(q, c);
-            }
+            // The sequence's coordinates: integer work, lane by lane.
+            let x = W::from_fn(|k| unit32(gx ^ self.shift[c + k].0));
+            let y = W::from_fn(|k| unit32(gy ^ self.shift[c + k].1));
+            let (p, idle) = match &self.shape {
+                AreaShape::Rect {
+                    corner,
+                    edge_u,
+                    edge_v,
+                } => {
+                    let corner = V3::splat(*corner);
+                    let p = (corner + V3::splat(*edge_u) * x) + V3::splat(*edge_v) * y;
+                    (p, corner)
+                }
+                AreaShape::Sphere {
+                    center,
+                    radius,
+                    basis,
+                } => {
+                    let (e1, e2) = (V3::load(&basis[0], c), V3::load(&basis[1], c));
+                    let (a, b) = super::lens::disc(x, y);
+                    let center = V3::splat(*center);
+                    (center + (e1 * a + e2 * b) * W::splat(*radius), center)
+                }
+            };
+            V3::select(live, p, idle).store(out, c);
         }
     }
 }

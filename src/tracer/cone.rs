@@ -43,6 +43,10 @@ pub(super) fn occluders(scene: &Scene) -> Option<Vec<Occluder>> {
     }
     let mut out = Vec::new();
     for (i, o) in scene.objects.iter().enumerate() {
+        // Any mesh, glass too: shadow rays leaving a mesh start lifted off it, not at P.
+        if matches!(o.shape, Shape::Mesh { .. }) {
+            return None;
+        }
         if scene.materials[o.material].transparent() {
             continue;
         }
@@ -58,7 +62,7 @@ pub(super) fn occluders(scene: &Scene) -> Option<Vec<Occluder>> {
                 normal,
                 object,
             },
-            Shape::Mesh { .. } => return None,
+            Shape::Mesh { .. } => unreachable!("meshes returned above"),
         });
     }
     (out.len() <= MAX_OCCLUDERS).then_some(out)
