@@ -94,6 +94,9 @@ struct AreaPoints {
     shape: AreaShape,
 }
 
+// Built once per light and shading call, on the stack: the sphere's per-lane basis is what it
+// needs, and boxing the variant would cost an allocation each time.
+#[allow(clippy::large_enum_variant)]
 enum AreaShape {
     Rect {
         corner: DVec3,
