@@ -286,3 +286,70 @@ fn the_soft_shadows_example_checks_and_renders() {
     assert_eq!((w, h), (64, 36));
     assert!(rgb.iter().any(|&v| v > 100), "the lights light something");
 }
+
+/// Skipping the shadow rays of lanes whose cone towards an area light meets no opaque object
+/// changes no byte: the talk with a sphere light and with a rect light (spheres resting on a
+/// huge floor sphere, partly shadowed cones), the penumbra scene (a plane floor) and the soft
+/// shadows example with a glass ball (whose filter still applies), in f64 and f32, rendered
+/// with the test on and switched off (`RAYREEL_SHADOW_CONES=off`: every shadow ray traced).
+#[test]
+fn skipping_shadow_rays_of_open_cones_changes_no_byte() {
+    let tmp = scratch("area-cones");
+    let talk = std::fs::read_to_string(repo().join("sequences/talk.yaml")).unwrap();
+    let point = "- point: { position: [5, 5, 5], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }";
+    assert!(talk.contains(point));
+    let sphere = talk.replace(
+        point,
+        "- sphere: { center: [5, 5, 5], radius: 0.5, ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1], samples: 16 }",
+    );
+    let rect = talk.replace(
+        point,
+        "- rect: { corner: [4.45, 5.15, 5.4], edge_u: [0.4, 0.4, -0.8], edge_v: [0.7, -0.7, 0], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1], samples: 16 }",
+    );
+    let soft = std::fs::read_to_string(repo().join("sequences/soft-shadows.yaml")).unwrap();
+    let glass = soft.replace(
+        "objects:\n",
+        "objects:\n  - sphere: { center: [0.2, 0.35, 1.6], radius: 0.35, material: { diffuse: [0, 0, 0], transmission: 0.9, ior: 1.5, fresnel: true } }\n",
+    );
+    let scenes = [
+        ("talk-sphere", sphere),
+        ("talk-rect", rect),
+        ("penumbra", penumbra_scene()),
+        ("glass", glass),
+    ];
+    for (name, text) in scenes {
+        std::fs::write(tmp.join(format!("{name}.yaml")), text).unwrap();
+        for precision in ["f64", "f32"] {
+            let mut outputs = Vec::new();
+            for cones in ["on", "off"] {
+                let png = format!("{name}-{precision}-{cones}.png");
+                let file = format!("{name}.yaml");
+                let args = [
+                    "render",
+                    &file,
+                    "-q",
+                    "--size",
+                    "96x54",
+                    "--samples",
+                    "2",
+                    "--precision",
+                    precision,
+                    "-o",
+                    &png,
+                ];
+                let out = bin()
+                    .args(args)
+                    .current_dir(&tmp)
+                    .env("RAYREEL_SHADOW_CONES", cones)
+                    .output()
+                    .expect("rayreel runs");
+                assert!(out.status.success(), "{}", stderr(&out));
+                outputs.push(std::fs::read(tmp.join(&png)).unwrap());
+            }
+            assert!(
+                outputs[0] == outputs[1],
+                "{name} {precision}: the skip changed bytes"
+            );
+        }
+    }
+}

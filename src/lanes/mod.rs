@@ -82,6 +82,10 @@ pub trait Lanes:
     /// One lane of the same precision: what per-lane scalar code computes in, so a lane's
     /// value never depends on the width.
     type One: Lanes<M = bool>;
+    /// f64 lanes under the same CPU feature (this type itself in f64, at most `N` lanes):
+    /// where an f32 kernel needs f64 arithmetic per lane (an area light's points), it runs in
+    /// these, `N / F64::N` groups at a time.
+    type F64: Lanes;
     /// A magnitude whose reciprocal is finite in this precision: it stands in for a zero
     /// direction component in the slab test.
     const TINY: f64;
@@ -218,6 +222,7 @@ impl<L: Lanes> Lanes for Pair<L> {
     const N: usize = 2 * L::N;
     type M = PairMask<L::M>;
     type One = L::One;
+    type F64 = Pair<L::F64>;
     const TINY: f64 = L::TINY;
     const BOX_SLACK: f64 = L::BOX_SLACK;
     #[inline(always)]
@@ -361,6 +366,7 @@ macro_rules! scalar_lanes {
             const N: usize = 1;
             type M = bool;
             type One = $t;
+            type F64 = F64x1;
             const TINY: f64 = $tiny;
             const BOX_SLACK: f64 = $slack;
             #[inline(always)]

@@ -59,6 +59,24 @@ impl<V: Lanes> V3<V> {
         }
     }
 
+    /// Lanes `from` … `from + N − 1` of per-axis arrays.
+    #[inline(always)]
+    pub fn load(a: &[[f64; MAX_LANES]; 3], from: usize) -> V3<V> {
+        V3 {
+            x: V::load(&a[0][from..]),
+            y: V::load(&a[1][from..]),
+            z: V::load(&a[2][from..]),
+        }
+    }
+
+    /// Into lanes `from` … `from + N − 1` of per-axis arrays.
+    #[inline(always)]
+    pub fn store(self, a: &mut [[f64; MAX_LANES]; 3], from: usize) {
+        self.x.store(&mut a[0][from..]);
+        self.y.store(&mut a[1][from..]);
+        self.z.store(&mut a[2][from..]);
+    }
+
     /// Lane `k` as a `DVec3`.
     #[inline(always)]
     pub fn lane(self, k: usize) -> DVec3 {

@@ -26,7 +26,7 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 macro_rules! x86_lanes {
     (
         $(#[$doc:meta])*
-        $t:ident($reg:ty): $n:literal lanes, one $one:ident, tiny $tiny:expr, slack $slack:expr;
+        $t:ident($reg:ty): $n:literal lanes, one $one:ident, wide $wide:ident, tiny $tiny:expr, slack $slack:expr;
         safety: $safety:literal;
         outlined $outlined:ident;
         mask $m:ident $(($mreg:ty) {
@@ -125,6 +125,7 @@ macro_rules! x86_lanes {
             const N: usize = $n;
             type M = $m;
             type One = $one;
+            type F64 = $wide;
             const TINY: f64 = $tiny;
             const BOX_SLACK: f64 = $slack;
             #[inline(always)]
@@ -239,7 +240,7 @@ unsafe fn avx512<R>(f: impl FnOnce() -> R) -> R {
 
 x86_lanes! {
     /// 4 × f64 in an AVX register.
-    F64x4(__m256d): 4 lanes, one F64x1, tiny 1e-300, slack 0.0;
+    F64x4(__m256d): 4 lanes, one F64x1, wide F64x4, tiny 1e-300, slack 0.0;
     safety: "AVX instructions; only named by `Kernel::run` for `Kernel::Avx2`, inside its \
         `avx2` entry point, after `Kernel::supported` detected AVX2 (which implies AVX).";
     outlined avx2;
@@ -264,7 +265,7 @@ x86_lanes! {
 
 x86_lanes! {
     /// 8 × f32 in an AVX register.
-    F32x8(__m256): 8 lanes, one F32x1, tiny 1e-30, slack 1.0 / 65536.0;
+    F32x8(__m256): 8 lanes, one F32x1, wide F64x4, tiny 1e-30, slack 1.0 / 65536.0;
     safety: "AVX instructions; only named by `Kernel::run` for `Kernel::Avx2`, inside its \
         `avx2` entry point, after `Kernel::supported` detected AVX2 (which implies AVX).";
     outlined avx2;
@@ -294,7 +295,7 @@ x86_lanes! {
 x86_lanes! {
     /// 8 × f64 in an AVX-512 register. AVX-512F has no float bitwise operations (those are
     /// AVX-512DQ's), so the sign bits are handled as integers.
-    F64x8(__m512d): 8 lanes, one F64x1, tiny 1e-300, slack 0.0;
+    F64x8(__m512d): 8 lanes, one F64x1, wide F64x8, tiny 1e-300, slack 0.0;
     safety: "AVX-512F instructions; only named by `Kernel::run` for `Kernel::Avx512`, inside \
         its `avx512` entry point, after `Kernel::supported` detected AVX-512F.";
     outlined avx512;
@@ -321,7 +322,7 @@ x86_lanes! {
 
 x86_lanes! {
     /// 16 × f32 in an AVX-512 register, sign bits handled as integers as in `F64x8`.
-    F32x16(__m512): 16 lanes, one F32x1, tiny 1e-30, slack 1.0 / 65536.0;
+    F32x16(__m512): 16 lanes, one F32x1, wide F64x8, tiny 1e-30, slack 1.0 / 65536.0;
     safety: "AVX-512F instructions; only named by `Kernel::run` for `Kernel::Avx512`, inside \
         its `avx512` entry point, after `Kernel::supported` detected AVX-512F.";
     outlined avx512;

@@ -58,32 +58,31 @@ pub(super) fn light<V: Lanes>(
     if !lit.any() {
         return;
     }
+    // Lanes whose cone towards the light meets no opaque object trace no shadow ray.
+    // `match`, not `Option::map`: a closure is compiled outside the kernel's
+    // `#[target_feature]` function, and lane operations must stay in it.
+    #[allow(clippy::manual_map)]
+    let seen = match &world.cones {
+        Some(o) => Some(super::cone::open(
+            o,
+            super::cone::ball(light),
+            at.point,
+            at.object,
+            lit,
+        )),
+        None => None,
+    };
     let share = Some(V::splat(1.0 / f64::from(m)));
-    let mut block = [[[0.0; MAX_LANES]; 3]; BLOCK];
-    let mut j = 0;
-    while j < m {
-        let n = (m - j).min(BLOCK as u32);
-        points.block(k * m + j, n as usize, V::N, &mut block);
-        for q in &block[..n as usize] {
-            let q = V3 {
-                x: V::load(&q[0]),
-                y: V::load(&q[1]),
-                z: V::load(&q[2]),
-            };
-            let (l, d) = towards(at.point, q);
-            shine(world, s, at, lit, (l, d), &i, share, sum, rays);
-        }
-        j += n;
+    let mut q = [[0.0; MAX_LANES]; 3];
+    for j in 0..m {
+        points.place::<V::F64>(k * m + j, V::N, &mut q);
+        let (l, d) = towards(at.point, V3::load(&q, 0));
+        shine(world, s, at, (lit, seen), (l, d), &i, share, sum, rays);
     }
 }
 
-/// Light points placed at a time: the scalar work (libm's sin and cos for a sphere) runs as
-/// one loop between lane work, so the lanes' registers are saved around it once, not around
-/// every call.
-const BLOCK: usize = 16;
-
-/// `BLOCK` points of every lane, as f64 coordinates: [point][axis][lane].
-type Block = [[[f64; MAX_LANES]; 3]; BLOCK];
+/// Per axis, one f64 value per lane.
+type Axes = [[f64; MAX_LANES]; 3];
 
 /// Where an area light's points fall for each lane of a packet: per lane its digital shift
 /// and, for a sphere, the disk it sees (centre, radius and the basis of the disk's plane).
@@ -107,8 +106,9 @@ enum AreaShape {
     Sphere {
         center: DVec3,
         radius: f64,
-        /// Per lane, e1 and e2 of the disk facing the lane's point.
-        basis: [(DVec3, DVec3); MAX_LANES],
+        /// Per lane, e1 and e2 of the disk facing the lane's point (0 on lanes without
+        /// points).
+        basis: [Axes; 2],
     },
 }
 
@@ -142,17 +142,10 @@ impl AreaPoints {
                 edge_v,
             },
             Light::Sphere { center, radius, .. } => {
-                let (px, py, pz) = (point.x.array(), point.y.array(), point.z.array());
-                let mut basis = [(DVec3::ZERO, DVec3::ZERO); MAX_LANES];
-                for (k, b) in basis.iter_mut().enumerate().take(V::N) {
-                    if lanes >> k & 1 == 0 {
-                        continue;
-                    }
-                    match disk_basis(center, radius, DVec3::new(px[k], py[k], pz[k])) {
-                        Some(e) => *b = e,
-                        None => lanes &= !(1 << k),
-                    }
-                }
+                // The surface points widened exactly to f64, whatever the kernel's precision.
+                let p = [point.x.array(), point.y.array(), point.z.array()];
+                let basis;
+                (lanes, basis) = disk_bases::<V::F64>(center, radius, &p, lanes, V::N);
                 AreaShape::Sphere {
                     center,
                     radius,
@@ -168,78 +161,89 @@ impl AreaPoints {
         }
     }
 
-    /// Points g … g + n − 1 (n ≤ `BLOCK`) of each lane's sequence on the light into
-    /// `out[..n]`, for lanes 0 … lanes − 1 (the light's centre or corner on lanes that take no
-    /// points). Plain f64 code, kept out of line: the same function for every lane type.
-    #[inline(never)]
-    fn block(&self, g: u32, n: usize, lanes: usize, out: &mut Block) {
+    /// Point g of each lane's sequence on the light into `out`, for lanes 0 … lanes − 1 (the
+    /// light's centre or corner on lanes that take no points), computed in the f64 lanes `W`,
+    /// `W::N` lanes at a time.
+    #[inline(always)]
+    fn place<W: Lanes>(&self, g: u32, lanes: usize, out: &mut Axes) {
         use super::sample::{sobol02, unit32};
-        for (j, q) in out.iter_mut().enumerate().take(n) {
-            let (gx, gy) = sobol02(g + j as u32);
-            for k in 0..lanes {
-                let live = self.lanes >> k & 1 == 1;
-                let (x, y) = (unit32(gx ^ self.shift[k].0), unit32(gy ^ self.shift[k].1));
-                let p = match &self.shape {
-                    AreaShape::Rect {
-                        corner,
-                        edge_u,
-                        edge_v,
-                    } => match live {
-                        true => rect_point(*corner, *edge_u, *edge_v, x, y),
-                        false => *corner,
-                    },
-                    AreaShape::Sphere {
-                        center,
-                        radius,
-                        basis,
-                    } => match live {
-                        true => disk_point(*center, *radius, basis[k], x, y),
-                        false => *center,
-                    },
-                };
-                (q[0][k], q[1][k], q[2][k]) = (p.x, p.y, p.z);
-            }
+        let (gx, gy) = sobol02(g);
+        for c in (0..lanes).step_by(W::N) {
+            let live = W::M::from_bits(self.lanes >> c);
+            // The sequence's coordinates: integer work, lane by lane.
+            let x = W::from_fn(|k| unit32(gx ^ self.shift[c + k].0));
+            let y = W::from_fn(|k| unit32(gy ^ self.shift[c + k].1));
+            let (p, idle) = match &self.shape {
+                AreaShape::Rect {
+                    corner,
+                    edge_u,
+                    edge_v,
+                } => {
+                    let corner = V3::splat(*corner);
+                    let p = (corner + V3::splat(*edge_u) * x) + V3::splat(*edge_v) * y;
+                    (p, corner)
+                }
+                AreaShape::Sphere {
+                    center,
+                    radius,
+                    basis,
+                } => {
+                    let (e1, e2) = (V3::load(&basis[0], c), V3::load(&basis[1], c));
+                    let (a, b) = super::lens::disc(x, y);
+                    let center = V3::splat(*center);
+                    (center + (e1 * a + e2 * b) * W::splat(*radius), center)
+                }
+            };
+            V3::select(live, p, idle).store(out, c);
         }
     }
 }
 
-/// corner + x·edge_u + y·edge_v, per component ((corner + x·u) + y·v).
+/// The disks facing the points `p` of lanes 0 … n − 1, computed in `W`'s lanes: the lanes of
+/// `lanes` outside the sphere, and each one's basis (`disk_basis`).
 #[inline(always)]
-fn rect_point(corner: DVec3, u: DVec3, v: DVec3, x: f64, y: f64) -> DVec3 {
-    DVec3::new(
-        (corner.x + x * u.x) + y * v.x,
-        (corner.y + x * u.y) + y * v.y,
-        (corner.z + x * u.z) + y * v.z,
-    )
+fn disk_bases<W: Lanes>(
+    center: DVec3,
+    radius: f64,
+    p: &Axes,
+    mut lanes: u32,
+    n: usize,
+) -> (u32, [Axes; 2]) {
+    let mut basis = [[[0.0; MAX_LANES]; 3]; 2];
+    for c in (0..n).step_by(W::N) {
+        let on = W::M::from_bits(lanes >> c);
+        let (on, e1, e2) = disk_basis(center, radius, V3::<W>::load(p, c), on);
+        let group = W::M::first(W::N).bits() << c;
+        lanes = (lanes & !group) | on.bits() << c;
+        e1.store(&mut basis[0], c);
+        e2.store(&mut basis[1], c);
+    }
+    (lanes, basis)
 }
 
 /// The basis (e1, e2) of the disk through `center` perpendicular to w = normalize(center − p),
-/// by Duff et al. 2017; None when p is not outside the sphere (|center − p| ≤ radius, or NaN).
+/// by Duff et al. 2017, on the lanes of `on` where p is outside the sphere (|center − p| >
+/// radius, not NaN); those lanes are returned with the basis.
 #[inline(always)]
-fn disk_basis(center: DVec3, radius: f64, p: DVec3) -> Option<(DVec3, DVec3)> {
-    let v = DVec3::new(center.x - p.x, center.y - p.y, center.z - p.z);
+fn disk_basis<W: Lanes>(center: DVec3, radius: f64, p: V3<W>, on: W::M) -> (W::M, V3<W>, V3<W>) {
+    let v = V3::splat(center) - p;
     let d = ((v.x * v.x + v.y * v.y) + v.z * v.z).sqrt();
-    if d.is_nan() || d <= radius {
-        return None;
-    }
-    let r = 1.0 / d;
-    let w = DVec3::new(v.x * r, v.y * r, v.z * r);
-    let sign = 1f64.copysign(w.z);
-    let a = -1.0 / (sign + w.z);
+    let on = on.and(d.gt(W::splat(radius)));
+    let one = W::splat(1.0);
+    let w = v * (one / d);
+    let sign = one.copysign(w.z);
+    let a = -one / (sign + w.z);
     let b = w.x * w.y * a;
-    let e1 = DVec3::new(1.0 + sign * w.x * w.x * a, sign * b, -sign * w.x);
-    let e2 = DVec3::new(b, sign + w.y * w.y * a, -w.y);
-    Some((e1, e2))
-}
-
-/// center + radius·(a·e1 + b·e2) with (a, b) the concentric map of (x, y), per component
-/// c + radius·((a·e1) + (b·e2)).
-#[inline(always)]
-fn disk_point(center: DVec3, radius: f64, (e1, e2): (DVec3, DVec3), x: f64, y: f64) -> DVec3 {
-    let (a, b) = super::lens::concentric(x, y);
-    DVec3::new(
-        center.x + radius * (a * e1.x + b * e2.x),
-        center.y + radius * (a * e1.y + b * e2.y),
-        center.z + radius * (a * e1.z + b * e2.z),
-    )
+    let e1 = V3 {
+        x: one + sign * w.x * w.x * a,
+        y: sign * b,
+        z: -sign * w.x,
+    };
+    let e2 = V3 {
+        x: b,
+        y: sign + w.y * w.y * a,
+        z: -w.y,
+    };
+    let zero = V3::zero();
+    (on, V3::select(on, e1, zero), V3::select(on, e2, zero))
 }

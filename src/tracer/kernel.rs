@@ -96,6 +96,15 @@ impl Kernel {
         (out, cast)
     }
 
+    /// The lens's concentric map (`lens::disc`) of each point of `ab` in this kernel's lanes
+    /// and `precision`, for tests that compare the widths lane by lane.
+    #[cfg(test)]
+    pub(super) fn disc(self, precision: Precision, ab: &[(f64, f64)]) -> Vec<(f64, f64)> {
+        let mut out = vec![(0.0, 0.0); ab.len()];
+        self.run(precision, Job::Disc(ab, &mut out));
+        out
+    }
+
     /// Rows a band of one pass holds: the height of this kernel's tiles.
     pub(super) fn band_rows(self, precision: Precision) -> usize {
         rows::tile_rows(self.lanes_in(precision))
@@ -166,6 +175,8 @@ enum Job<'a, 'b> {
     Marked(&'a Pass<'b>, &'a [u32], Old<'a>, &'a mut [[f32; 5]]),
     Depth(&'a Pass<'b>, u32, &'a mut [f32]),
     Rays(&'a World, &'a [Ray], u32, &'a mut [DVec3]),
+    #[cfg(test)]
+    Disc(&'a [(f64, f64)], &'a mut [(f64, f64)]),
 }
 
 enum Done {
@@ -188,6 +199,11 @@ impl Job<'_, '_> {
             }
             Job::Rays(world, rays, depth, out) => {
                 Done::Cast(rows::rays::<V>(world, rays, depth, out))
+            }
+            #[cfg(test)]
+            Job::Disc(ab, out) => {
+                super::lens::disc_all::<V>(ab, out);
+                Done::Nothing
             }
         }
     }

@@ -10,6 +10,7 @@ mod adaptive;
 pub mod aov;
 mod area;
 pub(crate) mod bvh;
+mod cone;
 pub mod glass;
 pub mod intersect;
 pub mod kernel;
@@ -66,6 +67,9 @@ pub struct World {
     curvature: Vec<f64>,
     /// Some light is an area light: eye samples then carry their pixels' light seeds.
     area_lights: bool,
+    /// The opaque objects an area light's shadow cones are tested against, when the test
+    /// applies (`cone::occluders`).
+    cones: Option<Vec<cone::Occluder>>,
 }
 
 impl World {
@@ -106,6 +110,7 @@ impl World {
         let textured = scene.materials.iter().any(|m| m.textured())
             || matches!(scene.sky, Some(crate::scene::Sky::Image { .. }));
         let mut world = World {
+            cones: cone::occluders(&scene),
             branches: scene.materials.iter().any(|m| m.branches()),
             area_lights: scene.lights.iter().any(|l| l.area_samples().is_some()),
             scene,
@@ -157,6 +162,7 @@ impl World {
         let scene = self.scene.shifted(by);
         World {
             clear: clear(&scene, &self.bvhs),
+            cones: cone::occluders(&scene),
             scene,
             geometry: self.geometry.shifted(by, PAD),
             opaque: self.opaque.as_ref().map(|g| g.shifted(by, PAD)),
