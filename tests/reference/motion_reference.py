@@ -405,12 +405,13 @@ class AreaScene(mr.Scene):
                     if a2 == 0.0 and b2 == 0.0:
                         al = be = 0.0
                     else:
-                        q4 = math.pi / 4.0
+                        # tracer.md: the concentric map of Thin lens (Taylor sin and cos)
                         if max(a2, 0.0 - a2) > max(b2, 0.0 - b2):
-                            rr, phi = a2, q4 * (b2 / a2)
+                            sn, cs = fr.sin_cos(fr.QUARTER_PI * (b2 / a2))
+                            al, be = a2 * cs, a2 * sn
                         else:
-                            rr, phi = b2, 2.0 * q4 - q4 * (a2 / b2)
-                        al, be = rr * math.cos(phi), rr * math.sin(phi)
+                            sn, cs = fr.sin_cos(fr.QUARTER_PI * (a2 / b2))
+                            al, be = b2 * sn, b2 * cs
                     q = tuple(C[i] + R * ((al * e1[i]) + (be * e2[i])) for i in range(3))
                 # "Each point is a point light at q, exactly as above": mesh_reference's loop for
                 # one point light without ambient gives (0 + ka∘0) + term = term, or 0 when the
