@@ -78,8 +78,7 @@ fn walk_in<V: Lanes, S: Visit<V>, R: Real>(
         Divergent::Below(k) => k,
     };
     if lanes.count() < below as u64 {
-        let singles = Rays1::<R>::new(slabs);
-        return each_lane(&tree.nodes, slabs, &singles, lanes, 0, visit);
+        return each_lane::<V, S, R>(&tree.nodes, slabs, lanes, 0, visit);
     }
     by_lanes::<V, S, R>(&tree.nodes, rays, slabs, lanes, below, visit);
 }
@@ -112,7 +111,9 @@ impl Divergent {
         })
     }
 
-    pub const DEFAULT: Divergent = Divergent::Below(4);
+    /// Measured best on glass and mirror meshes (docs/performance.md, "Rays that leave their
+    /// packet").
+    pub const DEFAULT: Divergent = Divergent::Rays;
 }
 
 /// Walks each lane of `lanes` alone through the subtree of node `at`.
@@ -120,16 +121,16 @@ impl Divergent {
 fn each_lane<V: Lanes, S: Visit<V>, R: Real>(
     nodes: &[Node],
     slabs: &Slabs<V>,
-    singles: &Rays1<R>,
     lanes: V::M,
     at: u32,
     visit: &mut S,
 ) {
+    let singles = Rays1::<R>::new(slabs);
     let mut bits = lanes.bits();
     while bits != 0 {
         let k = bits.trailing_zeros() as usize;
         bits &= bits - 1;
-        single::walk(nodes, slabs, singles, k, at, visit);
+        single::walk(nodes, slabs, &singles, k, at, visit);
     }
 }
 
@@ -199,7 +200,6 @@ fn by_lanes<V: Lanes, S: Visit<V>, R: Real>(
     below: usize,
     visit: &mut S,
 ) {
-    let mut singles = None;
     // Children are ordered along the first lane's direction (a heuristic only).
     let lead = lanes.bits().trailing_zeros() as usize;
     let towards = [
@@ -231,12 +231,7 @@ fn by_lanes<V: Lanes, S: Visit<V>, R: Real>(
         }
         let child = node.first[c];
         if open.count() < below as u64 {
-            if singles.is_none() {
-                singles = Some(Rays1::<R>::new(slabs));
-            }
-            if let Some(singles) = &singles {
-                each_lane(nodes, slabs, singles, open, child, visit);
-            }
+            each_lane::<V, S, R>(nodes, slabs, open, child, visit);
             continue;
         }
         let inner = &nodes[child as usize];
