@@ -297,6 +297,29 @@ impl<V: Lanes, T: Stored> Visit<V> for NearestVisit<'_, V, T> {
             }
         }
     }
+
+    /// `leaf` for lane `k` alone, in `V::One`: the same operations on the same values.
+    #[inline(always)]
+    fn leaf_one(&mut self, _: &Slabs<V>, first: usize, count: usize, k: usize) {
+        let ray = Lone::of(self.rays, &self.from, k);
+        let lane = V::M::from_bits(1 << k);
+        let best = &mut *self.best;
+        for tri in &self.tris[first..first + count] {
+            let (hit, t, w) = ray.hit(tri);
+            if !hit {
+                continue;
+            }
+            let now = lane_of(best.t, k);
+            if t.lt(now) || (t.eq(now) && ties_won(lane, self.object, tri.id(), best).any()) {
+                let (u, v) = barycentrics(w);
+                best.t = V::select(lane, V::splat(t.lane(0)), best.t);
+                best.object = V::select(lane, V::splat(f64::from(self.object)), best.object);
+                best.u = V::select(lane, V::splat(u.lane(0)), best.u);
+                best.v = V::select(lane, V::splat(v.lane(0)), best.v);
+                best.prim[k] = tri.id();
+            }
+        }
+    }
 }
 
 struct AnyVisit<'a, V: Lanes, T: Stored> {
@@ -331,6 +354,71 @@ impl<V: Lanes, T: Stored> Visit<V> for AnyVisit<'_, V, T> {
             }
         }
     }
+
+    /// `leaf` for lane `k` alone, in `V::One`.
+    #[inline(always)]
+    fn leaf_one(&mut self, _: &Slabs<V>, first: usize, count: usize, k: usize) {
+        let ray = Lone::of(self.rays, &self.from, k);
+        let max_t = lane_of(self.max_t, k);
+        for tri in &self.tris[first..first + count] {
+            let (hit, t, _) = ray.hit(tri);
+            if hit && t.lt(max_t) {
+                self.blocked = self.blocked.or(V::M::from_bits(1 << k));
+                return;
+            }
+        }
+    }
+}
+
+/// One lane of a packet in mesh coordinates, as one lane of its precision: where its
+/// triangle tests start (and how far along the ray that is) and its direction.
+struct Lone<W: Lanes> {
+    from: V3<W>,
+    skipped: Option<W>,
+    dir: V3<W>,
+}
+
+impl<W: Lanes<M = bool>> Lone<W> {
+    #[inline(always)]
+    fn of<V: Lanes<One = W>>(rays: &Rays<V>, from: &(V3<V>, Option<V>), k: usize) -> Lone<W> {
+        Lone {
+            from: v3_of(from.0, k),
+            skipped: match from.1 {
+                Some(t) => Some(lane_of(t, k)),
+                None => None,
+            },
+            dir: v3_of(rays.dir, k),
+        }
+    }
+
+    /// `triangle_hit` of one stored triangle for this ray.
+    #[inline(always)]
+    fn hit<T: Stored>(&self, tri: &T) -> (bool, W, [W; 3]) {
+        let (v, n) = tri.lanes::<W>();
+        triangle_hit(v, n, self.from, self.dir, self.skipped, true)
+    }
+}
+
+/// Lane `k` of the vectors `v` as one lane of their precision (exactly).
+#[inline(always)]
+fn v3_of<V: Lanes>(v: V3<V>, k: usize) -> V3<V::One> {
+    V3 {
+        x: lane_of(v.x, k),
+        y: lane_of(v.y, k),
+        z: lane_of(v.z, k),
+    }
+}
+
+/// Lane `k` of `v` as one lane of its precision (exactly).
+#[inline(always)]
+fn lane_of<V: Lanes>(v: V, k: usize) -> V::One {
+    if single::<V>() {
+        let mut a = [0f32; MAX_LANES];
+        v.store_f32(&mut a);
+        V::One::splat(f64::from(a[k]))
+    } else {
+        V::One::splat(v.lane(k))
+    }
 }
 
 /// `triangle_hit` of one stored triangle for the packet in mesh coordinates.
@@ -362,3 +450,6 @@ fn ties_won<V: Lanes>(tie: V::M, object: u32, id: u32, best: &Best<V>) -> V::M {
     }
     V::M::from_bits(won)
 }
+
+#[cfg(test)]
+mod tests;

@@ -16,7 +16,7 @@
 
 use super::Slabs;
 use super::wide::{Node, WIDTH};
-use crate::lanes::{Lanes, Mask};
+use crate::lanes::{Lanes, MAX_LANES, Mask};
 use std::ops::{Mul, Sub};
 
 /// The float the lanes compute in: f32 or f64.
@@ -25,6 +25,8 @@ pub(crate) trait Real: Copy + PartialOrd + Sub<Output = Self> + Mul<Output = Sel
     fn of(x: f64) -> Self;
     fn of_f32(x: f32) -> Self;
     fn wide(self) -> f64;
+    /// The lanes of `v` (exactly: `v` holds values of this precision).
+    fn lanes<V: Lanes>(v: V) -> [Self; MAX_LANES];
     #[inline(always)]
     fn min(self, o: Self) -> Self {
         if self < o { self } else { o }
@@ -49,6 +51,12 @@ impl Real for f32 {
     fn wide(self) -> f64 {
         f64::from(self)
     }
+    #[inline(always)]
+    fn lanes<V: Lanes>(v: V) -> [f32; MAX_LANES] {
+        let mut out = [0.0; MAX_LANES];
+        v.store_f32(&mut out);
+        out
+    }
 }
 
 impl Real for f64 {
@@ -64,6 +72,10 @@ impl Real for f64 {
     #[inline(always)]
     fn wide(self) -> f64 {
         self
+    }
+    #[inline(always)]
+    fn lanes<V: Lanes>(v: V) -> [f64; MAX_LANES] {
+        v.array()
     }
 }
 

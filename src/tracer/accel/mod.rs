@@ -20,6 +20,7 @@ use std::sync::Arc;
 
 mod build;
 pub(crate) mod frustum;
+mod single;
 mod slabs;
 pub(crate) mod walk;
 pub(crate) mod wide;

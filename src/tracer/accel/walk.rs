@@ -9,9 +9,10 @@
 //! every child lane by lane and carries each child's lanes down with it.
 
 use super::frustum::{Frustum, Real};
+use super::single::{self, Rays1};
 use super::wide::{MAX_DEPTH, Node, Tree, WIDTH};
 use super::{Rays, Slabs};
-use crate::lanes::{Lanes, Mask, single};
+use crate::lanes::{self, Lanes, Mask};
 use std::mem::MaybeUninit;
 
 /// What a walk does at a leaf, and which lanes still search and how far.
@@ -22,26 +23,115 @@ pub(crate) trait Visit<V: Lanes> {
     fn limit(&self) -> V;
     /// Looks at the `count` leaf items from `first` (in the tree's leaf order) for `enter`.
     fn leaf(&mut self, slabs: &Slabs<V>, first: usize, count: usize, enter: V::M);
+    /// `leaf` for lane `k` alone (a single ray's walk): by default the packet's leaf with one
+    /// lane set; a visit may compute the lane alone in `V::One`, which gives the same bits.
+    #[inline(always)]
+    fn leaf_one(&mut self, slabs: &Slabs<V>, first: usize, count: usize, k: usize) {
+        self.leaf(slabs, first, count, V::M::from_bits(1 << k));
+    }
 }
 
 /// Visits the leaves of `tree` whose boxes a lane of `lanes` enters before its limit, nearer
 /// children first.
 #[inline(always)]
 pub(crate) fn walk<V: Lanes, S: Visit<V>>(tree: &Tree, rays: &Rays<V>, lanes: V::M, visit: &mut S) {
+    walk_as(tree, rays, lanes, visit, Divergent::chosen());
+}
+
+/// `walk` with packets that are not narrow walked as `policy` says.
+#[inline(always)]
+pub(crate) fn walk_as<V: Lanes, S: Visit<V>>(
+    tree: &Tree,
+    rays: &Rays<V>,
+    lanes: V::M,
+    visit: &mut S,
+    policy: Divergent,
+) {
     let slabs = Slabs::new(rays, lanes);
-    let (lo, hi) = (tree.lo, tree.hi);
-    if single::<V>() {
-        if let Some(f) = Frustum::<f32>::new(&slabs, lanes)
-            && f.narrow(lo, hi)
-        {
-            return packet(&tree.nodes, &slabs, &f, lanes, visit);
-        }
-    } else if let Some(f) = Frustum::<f64>::new(&slabs, lanes)
-        && f.narrow(lo, hi)
-    {
-        return packet(&tree.nodes, &slabs, &f, lanes, visit);
+    match lanes::single::<V>() {
+        true => walk_in::<V, S, f32>(tree, rays, &slabs, lanes, visit, policy),
+        false => walk_in::<V, S, f64>(tree, rays, &slabs, lanes, visit, policy),
     }
-    by_lanes(&tree.nodes, rays, &slabs, lanes, visit);
+}
+
+/// `walk` with the packet's bounds and the single rays' box tests in the lanes' precision `R`.
+#[inline(always)]
+fn walk_in<V: Lanes, S: Visit<V>, R: Real>(
+    tree: &Tree,
+    rays: &Rays<V>,
+    slabs: &Slabs<V>,
+    lanes: V::M,
+    visit: &mut S,
+    policy: Divergent,
+) {
+    // A lone lane walks as a single ray unless lane-by-lane walks are asked for.
+    let lone = lanes.count() == 1 && policy != Divergent::Lanes;
+    if !lone
+        && let Some(f) = Frustum::<R>::new(slabs, lanes)
+        && f.narrow(tree.lo, tree.hi)
+    {
+        return packet(&tree.nodes, slabs, &f, lanes, visit);
+    }
+    let below = match policy {
+        Divergent::Lanes => 0,
+        Divergent::Rays => V::N + 1,
+        Divergent::Below(k) => k,
+    };
+    if lanes.count() < below as u64 {
+        return each_lane::<V, S, R>(&tree.nodes, slabs, lanes, 0, visit);
+    }
+    by_lanes::<V, S, R>(&tree.nodes, rays, slabs, lanes, below, visit);
+}
+
+/// How a packet that is not narrow walks: lane by lane down the tree (`Lanes`), one ray at a
+/// time (`Rays`), or lane by lane until fewer than k lanes enter a subtree, then one ray at a
+/// time through it (`Below(k)`). Only which boxes are tested depends on it, never a hit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Divergent {
+    Lanes,
+    Rays,
+    Below(usize),
+}
+
+impl Divergent {
+    /// The policy frames use, or the one `RAYREEL_DIVERGENT=lanes|rays|below:K` asks for (tests
+    /// and measurements only). Decided once per process.
+    pub fn chosen() -> Divergent {
+        static CHOSEN: std::sync::OnceLock<Divergent> = std::sync::OnceLock::new();
+        *CHOSEN.get_or_init(|| {
+            let asked = std::env::var("RAYREEL_DIVERGENT").unwrap_or_default();
+            match asked.as_str() {
+                "lanes" => Divergent::Lanes,
+                "rays" => Divergent::Rays,
+                _ => match asked.strip_prefix("below:").map(str::parse) {
+                    Some(Ok(k)) => Divergent::Below(k),
+                    _ => Divergent::DEFAULT,
+                },
+            }
+        })
+    }
+
+    /// Measured best on glass and mirror meshes (docs/performance.md, "Rays that leave their
+    /// packet").
+    pub const DEFAULT: Divergent = Divergent::Rays;
+}
+
+/// Walks each lane of `lanes` alone through the subtree of node `at`.
+#[inline(always)]
+fn each_lane<V: Lanes, S: Visit<V>, R: Real>(
+    nodes: &[Node],
+    slabs: &Slabs<V>,
+    lanes: V::M,
+    at: u32,
+    visit: &mut S,
+) {
+    let singles = Rays1::<R>::new(slabs);
+    let mut bits = lanes.bits();
+    while bits != 0 {
+        let k = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        single::walk(nodes, slabs, &singles, k, at, visit);
+    }
 }
 
 /// The walk of a narrow packet: children culled for the whole packet, leaves lane by lane.
@@ -102,11 +192,12 @@ fn open_node<R: Real>(stack: &mut Stack, frustum: &Frustum<R>, nodes: &[Node], a
 
 /// The walk of any packet: every child's box tested lane by lane, its lanes carried down.
 #[inline(always)]
-fn by_lanes<V: Lanes, S: Visit<V>>(
+fn by_lanes<V: Lanes, S: Visit<V>, R: Real>(
     nodes: &[Node],
     rays: &Rays<V>,
     slabs: &Slabs<V>,
     lanes: V::M,
+    below: usize,
     visit: &mut S,
 ) {
     // Children are ordered along the first lane's direction (a heuristic only).
@@ -139,6 +230,10 @@ fn by_lanes<V: Lanes, S: Visit<V>>(
             continue;
         }
         let child = node.first[c];
+        if open.count() < below as u64 {
+            each_lane::<V, S, R>(nodes, slabs, open, child, visit);
+            continue;
+        }
         let inner = &nodes[child as usize];
         let limit = visit.limit();
         let mut found = [(0f32, (0u32, 0u32)); WIDTH];
@@ -166,7 +261,7 @@ fn centre_along(n: &Node, c: usize, towards: [f32; 3]) -> f32 {
 
 /// Sorts by the first field, greatest first (an insertion sort: at most `WIDTH` entries).
 #[inline(always)]
-fn farthest_first<K: PartialOrd + Copy, T: Copy>(found: &mut [(K, T)]) {
+pub(super) fn farthest_first<K: PartialOrd + Copy, T: Copy>(found: &mut [(K, T)]) {
     for i in 1..found.len() {
         let mut j = i;
         while j > 0 && found[j - 1].0 < found[j].0 {
@@ -190,41 +285,29 @@ fn greatest<V: Lanes, R: Real>(v: V, lanes: V::M) -> R {
 }
 
 /// The deepest walk: at most `WIDTH` − 1 siblings wait on each of `MAX_DEPTH` levels.
-const STACK: usize = (WIDTH - 1) * MAX_DEPTH + WIDTH;
+pub(super) const STACK: usize = (WIDTH - 1) * MAX_DEPTH + WIDTH;
 
 /// The walk's stack of (node, child slot, lanes) entries, left uninitialised above its top
 /// (zeroing its `STACK` entries cost more than a short walk). Only the array lives in the
 /// caller's frame: a struct that also held the top was zeroed whole by the compiler.
-struct Stack<'a> {
-    entries: &'a mut MaybeUninit<[(u32, u32, u32); STACK]>,
-    top: usize,
+pub(super) struct Stack<'a, E = (u32, u32, u32)> {
+    pub(super) entries: &'a mut MaybeUninit<[E; STACK]>,
+    pub(super) top: usize,
 }
 
-impl Stack<'_> {
+impl<E: Copy> Stack<'_, E> {
     #[inline(always)]
-    fn push(&mut self, e: (u32, u32, u32)) {
+    pub(super) fn push(&mut self, e: E) {
         assert!(self.top < STACK);
         // SAFETY: in bounds (checked above); writing through the pointer reads nothing.
-        unsafe {
-            self.entries
-                .as_mut_ptr()
-                .cast::<(u32, u32, u32)>()
-                .add(self.top)
-                .write(e)
-        };
+        unsafe { self.entries.as_mut_ptr().cast::<E>().add(self.top).write(e) };
         self.top += 1;
     }
 
     #[inline(always)]
-    fn pop(&mut self) -> Option<(u32, u32, u32)> {
+    pub(super) fn pop(&mut self) -> Option<E> {
         self.top = self.top.checked_sub(1)?;
         // SAFETY: every entry below the top is in bounds and was written by `push`.
-        Some(unsafe {
-            self.entries
-                .as_ptr()
-                .cast::<(u32, u32, u32)>()
-                .add(self.top)
-                .read()
-        })
+        Some(unsafe { self.entries.as_ptr().cast::<E>().add(self.top).read() })
     }
 }

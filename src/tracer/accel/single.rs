@@ -1,0 +1,156 @@
+//! One ray's walk through a wide hierarchy, for the lanes of a packet whose rays went their
+//! own ways (reflections off curved surfaces, refractions, shadow rays from scattered hits):
+//! the ray tests the 4 children of a node at once (one box a lane of a 4-wide vector), visits
+//! them nearest first, and stops as soon as its `Visit` says it no longer searches.
+//!
+//! Why it never skips a box its lane would enter: each child's entry and exit are computed
+//! with exactly the operations of the lane's own test (`Slabs::enters`: fl(fl(p − o)·i) per
+//! plane, in the lane's precision, then max and min with 0 and the limit, then the same f32
+//! slack), so a child is skipped only when the lane's test would say no. Which of a box's two
+//! planes is the entry follows from the sign of i (never 0: `Slabs` puts ±TINY there), as the
+//! lane's min and max pick it. A child waiting on the stack is dropped when its entry lies past
+//! a limit that shrank meanwhile: that entry is the one the lane's test compares.
+
+use super::Slabs;
+use super::frustum::Real;
+use super::walk::{Stack, Visit, farthest_first};
+use super::wide::{Node, WIDTH};
+use crate::lanes::{Lanes, MAX_LANES, Mask};
+use std::mem::MaybeUninit;
+
+/// Each lane's origin and reciprocal direction per axis, in the lanes' precision.
+pub(crate) struct Rays1<R: Real> {
+    origin: [[R; MAX_LANES]; 3],
+    inv: [[R; MAX_LANES]; 3],
+}
+
+impl<R: Real> Rays1<R> {
+    #[inline(always)]
+    pub(crate) fn new<V: Lanes>(slabs: &Slabs<V>) -> Rays1<R> {
+        let (origin, inv, _) = slabs.parts();
+        Rays1 {
+            origin: [
+                R::lanes(origin[0]),
+                R::lanes(origin[1]),
+                R::lanes(origin[2]),
+            ],
+            inv: [R::lanes(inv[0]), R::lanes(inv[1]), R::lanes(inv[2])],
+        }
+    }
+
+    /// Lane `k` alone.
+    #[inline(always)]
+    fn ray<V: Lanes>(&self, k: usize) -> Ray1<R> {
+        let inv = [self.inv[0][k], self.inv[1][k], self.inv[2][k]];
+        Ray1 {
+            origin: [self.origin[0][k], self.origin[1][k], self.origin[2][k]],
+            inv,
+            backwards: [inv[0] < R::ZERO, inv[1] < R::ZERO, inv[2] < R::ZERO],
+            less: R::of(1.0 - V::BOX_SLACK),
+            more: R::of(1.0 + V::BOX_SLACK),
+        }
+    }
+}
+
+/// One lane's ray as its box tests see it.
+struct Ray1<R: Real> {
+    origin: [R; 3],
+    inv: [R; 3],
+    backwards: [bool; 3],
+    less: R,
+    more: R,
+}
+
+impl<R: Real> Ray1<R> {
+    /// Which children of `node` the ray enters at or before `limit`, and each one's entry.
+    #[inline(always)]
+    fn children(&self, node: &Node, limit: R) -> (u32, [R; WIDTH]) {
+        let mut near = [R::ZERO; WIDTH];
+        let mut far = [limit; WIDTH];
+        for axis in 0..3 {
+            let (entry, exit) = match self.backwards[axis] {
+                false => (&node.lo[axis], &node.hi[axis]),
+                true => (&node.hi[axis], &node.lo[axis]),
+            };
+            let (o, i) = (self.origin[axis], self.inv[axis]);
+            for c in 0..WIDTH {
+                near[c] = near[c].max((R::of_f32(entry[c]) - o) * i);
+                far[c] = far[c].min((R::of_f32(exit[c]) - o) * i);
+            }
+        }
+        let mut hit = 0u32;
+        for c in 0..WIDTH {
+            hit |= u32::from(near[c] * self.less <= far[c] * self.more) << c;
+        }
+        (hit & ((1 << node.kids) - 1), near)
+    }
+
+    /// Whether a box entered at `near` still starts at or before `limit`.
+    #[inline(always)]
+    fn before(&self, near: R, limit: R) -> bool {
+        near * self.less <= limit * self.more
+    }
+}
+
+/// Walks lane `k` alone through the subtree of node `at` (whose box the lane enters), leaves
+/// nearest first, until its `Visit` stops searching on it.
+#[inline(always)]
+pub(crate) fn walk<V: Lanes, S: Visit<V>, R: Real>(
+    nodes: &[Node],
+    slabs: &Slabs<V>,
+    rays: &Rays1<R>,
+    k: usize,
+    at: u32,
+    visit: &mut S,
+) {
+    let lane = V::M::from_bits(1 << k);
+    let ray = rays.ray::<V>(k);
+    let mut limit = R::lanes(visit.limit())[k];
+    let mut entries = MaybeUninit::uninit();
+    let mut stack = Stack {
+        entries: &mut entries,
+        top: 0,
+    };
+    push_children(&ray, nodes, at, limit, &mut stack);
+    while let Some((at, c, near)) = stack.pop() {
+        if !ray.before(near, limit) {
+            continue;
+        }
+        let node = &nodes[at as usize];
+        let (first, count) = (node.first[c as usize], node.count[c as usize]);
+        if count == 0 {
+            push_children(&ray, nodes, first, limit, &mut stack);
+            continue;
+        }
+        visit.leaf_one(slabs, first as usize, count as usize, k);
+        if !visit.open(lane).any() {
+            return;
+        }
+        limit = R::lanes(visit.limit())[k];
+    }
+}
+
+/// Pushes the children of node `at` the ray enters before `limit`, farthest first.
+#[inline(always)]
+fn push_children<R: Real>(
+    ray: &Ray1<R>,
+    nodes: &[Node],
+    at: u32,
+    limit: R,
+    stack: &mut Stack<(u32, u32, R)>,
+) {
+    let (hit, near) = ray.children(&nodes[at as usize], limit);
+    let mut found = [(R::ZERO, 0u32); WIDTH];
+    let mut n = 0;
+    let mut bits = hit;
+    while bits != 0 {
+        let c = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        found[n] = (near[c], c as u32);
+        n += 1;
+    }
+    farthest_first(&mut found[..n]);
+    for &(near, c) in &found[..n] {
+        stack.push((at, c, near));
+    }
+}
