@@ -383,10 +383,7 @@ impl<W: Lanes<M = bool>> Lone<W> {
     fn of<V: Lanes<One = W>>(rays: &Rays<V>, from: &(V3<V>, Option<V>), k: usize) -> Lone<W> {
         Lone {
             from: v3_of(from.0, k),
-            skipped: match from.1 {
-                Some(t) => Some(lane_of(t, k)),
-                None => None,
-            },
+            skipped: from.1.map(|t| lane_of(t, k)),
             dir: v3_of(rays.dir, k),
         }
     }

@@ -184,7 +184,7 @@ fn policies_agree<V: Lanes, One: Lanes>(mesh: &Instance, rng: &mut Rng) -> usize
 }
 
 fn placed(mesh: crate::scene::Mesh, scale: DVec3, turn: f64) -> Instance {
-    let bvh = Arc::new(Bvh::build(&Arc::new(mesh)));
+    let bvh = Arc::new(Bvh::build(&Arc::new(mesh)).unwrap());
     let place = Placement {
         scale,
         rotation: DMat3::from_rotation_y(turn) * DMat3::from_rotation_x(0.3 * turn),
