@@ -334,7 +334,10 @@ mod tests {
         // n0 = +y, n1 = −y, met half way along their edge: the blend is exactly 0.
         let sum = DVec3::Y * 0.5 + DVec3::NEG_Y * 0.5;
         assert_eq!(smooth_or(&place, sum, wound), wound);
-        assert_eq!(smooth_or(&place, DVec3::new(1e-320, 0.0, 0.0), wound), wound);
+        assert_eq!(
+            smooth_or(&place, DVec3::new(1e-320, 0.0, 0.0), wound),
+            wound
+        );
         let s = smooth_or(&place, DVec3::new(0.0, 3.0, 0.0), wound);
         assert_eq!(s, DVec3::Y);
     }
