@@ -5,8 +5,10 @@
 //!
 //! Two ways down. A packet whose rays are narrow next to the tree (`Frustum::narrow`: a tile
 //! of eye rays, the shadow rays of its hits towards one light) culls each node's children
-//! once for all its lanes, and tests lane by lane only at leaves. Any other packet tests
-//! every child lane by lane and carries each child's lanes down with it.
+//! once for all its lanes, and tests lane by lane only at leaves. Any other packet walks as
+//! `Divergent` says: by default each of its rays alone (`single`: one ray against a node's
+//! children at once, nearest first); with `RAYREEL_DIVERGENT=lanes` (tests and measurements)
+//! it tests every child lane by lane and carries each child's lanes down with it.
 
 use super::frustum::{Frustum, Real};
 use super::single::{self, Rays1};
