@@ -417,6 +417,40 @@ pub fn closest_to_origin(point: DVec3, normal: DVec3) -> DVec3 {
     normal * point.dot(normal)
 }
 
+/// v turned by the shortest rotation that takes the unit vector n to the unit vector m
+/// (Rodrigues' formula with c = n × m and d = n·m, which are the axis times sin and the cos of
+/// the angle): v·d + c × v + c·((c·v)/(1 + d)); v itself when 1 + d ≤ 1e-9 (n and m opposite:
+/// no shortest turn). Motion vectors carry plane points with it, and a plane whose normal
+/// moves carries its `u_axis` with it.
+pub fn turned(v: DVec3, n: DVec3, m: DVec3) -> DVec3 {
+    let (c, d) = (n.cross(m), n.dot(m));
+    // Not `1 + d > 1e-9` (NaN included): no turn.
+    if (1.0 + d).partial_cmp(&1e-9) != Some(std::cmp::Ordering::Greater) {
+        return v;
+    }
+    v * d + c.cross(v) + c * (c.dot(v) / (1.0 + d))
+}
+
+/// A plane's texture axis from a unit vector `a` and the plane's unit normal: `a` projected
+/// into the plane, a − n·(a·n), and its length (the loader refuses lengths below 1e-6).
+pub fn plane_axis(a: DVec3, normal: DVec3) -> (DVec3, f64) {
+    let along = a - normal * a.dot(normal);
+    (along, along.length())
+}
+
+/// edge_u × edge_v and its length; where that length overflows or underflows (edges near
+/// 1e100 or 1e-100), the same direction from the edges each divided by its largest component,
+/// so perpendicular edges of any length are never taken for parallel ones.
+pub fn area_normal(u: DVec3, v: DVec3) -> (DVec3, f64) {
+    let cross = u.cross(v);
+    let length = cross.length();
+    if length > 0.0 && length.is_finite() {
+        return (cross, length);
+    }
+    let cross = (u / u.abs().max_element()).cross(v / v.abs().max_element());
+    (cross, cross.length())
+}
+
 /// Rz · Ry · Rx for angles in degrees, right-handed (counter-clockwise seen from the positive
 /// axis). Whole multiples of 90° use exact 0 and ±1, so axis-aligned models stay aligned.
 pub fn rotation(degrees: DVec3) -> DMat3 {

@@ -9,8 +9,9 @@ use common::*;
 use rayreel::timeline::motion::Thing;
 use std::path::Path;
 
-/// A scene where a mesh turns and moves, a sphere travels and grows, a plane tilts, and a
-/// point, a spot and a directional light move and change colour: every kind of keyed field.
+/// A scene where a mesh turns and moves, a sphere travels and grows, a textured plane tilts
+/// (its texture's axis turning with it), a point, a spot and a directional light move and
+/// change colour, and a rect light moves and turns: every kind of keyed field.
 /// `keys` is what follows the sphere's keys (e.g. nothing, or a shutter).
 fn animated(render: &str) -> String {
     format!(
@@ -20,8 +21,9 @@ materials:
   clay: {{ ambient: [0.1, 0.08, 0.06], diffuse: [0.7, 0.55, 0.45], specular: [0.4, 0.4, 0.4], shininess: 60 }}
   red: {{ ambient: [0.1, 0, 0], diffuse: [0.8, 0.1, 0.1], specular: [1, 1, 1], shininess: 80, reflection: 0.2 }}
   grey: {{ diffuse: [0.6, 0.6, 0.6], specular: [0, 0, 0] }}
+  wood: {{ diffuse: {{ image: wood.png, scale: [0.5, 0.5] }}, specular: [0, 0, 0] }}
 objects:
-  - plane: {{ point: [0, 0, 0], normal: [0, 1, 0], material: grey }}
+  - plane: {{ point: [0, 0, 0], normal: [0, 1, 0], u_axis: [1, 0, 0.3], material: wood }}
     keys:
       - {{ time: 0 }}
       - {{ time: 1, normal: [0.1, 1, 0.05], point: [0, -0.1, 0] }}
@@ -49,6 +51,10 @@ lights:
     keys:
       - {{ time: 0, direction: [-1, -1, -1] }}
       - {{ time: 1, direction: [1, -1, -1], specular: [0.3, 0.3, 0.3] }}
+  - rect: {{ corner: [-1, 2.5, -0.5], edge_u: [1, 0, 0], edge_v: [0, 0, 1], samples: 4, diffuse: [0.3, 0.3, 0.3], specular: [0.2, 0.2, 0.2] }}
+    keys:
+      - {{ time: 0 }}
+      - {{ time: 1, corner: [-0.5, 2.5, -1], edge_u: [0.8, 0.3, 0], edge_v: [0, 0.2, 1.2] }}
 "
     )
 }
@@ -58,6 +64,11 @@ fn setup(name: &str, yaml: &str) -> Scratch {
     std::fs::copy(
         repo().join("sequences/models/blob.ply"),
         tmp.join("blob.ply"),
+    )
+    .unwrap();
+    std::fs::copy(
+        repo().join("sequences/textures/wood.png"),
+        tmp.join("wood.png"),
     )
     .unwrap();
     std::fs::write(tmp.join("seq.yaml"), yaml).unwrap();
@@ -208,9 +219,12 @@ fn a_frame_is_the_still_scene_that_writes_its_poses() {
 
 #[test]
 fn things_hold_before_their_first_key_and_after_their_last() {
+    // Without the rect light, whose points are drawn anew each frame.
+    let scene = animated("");
+    let scene = &scene[..scene.find("  - rect:").unwrap()];
     let yaml = format!(
         "{}timeline:\n  duration: 2\n  keyframes: [ {{ time: 0, position: [0, 1.2, 4], look_at: [0, 0.4, 0], fov: 55 }} ]\n",
-        animated("")
+        scene
             .replace("{ time: 0, center: [-1.2", "{ time: 0.25, center: [-1.2")
             .replace("{ time: 0 }", "{ time: 0.25 }")
             .replace("{ time: 0, direction", "{ time: 0.25, direction")
@@ -405,6 +419,17 @@ fn bad_keys_are_refused_with_file_line_and_field() {
         line_of("direction: [1, -1, -1]"),
         "lights[2].keys[1].direction",
     );
+    // A rect light whose edges turn edge-on at a key, and one that flips between keys.
+    let bad = base.replace("edge_v: [0, 0.2, 1.2]", "edge_v: [1.6, 0.6, 0]");
+    let err = refused(
+        &bad,
+        line_of("edge_v: [0, 0.2, 1.2]"),
+        "lights[3].keys[1].edge_v",
+    );
+    assert!(err.contains("parallel"), "{err}");
+    let bad = base.replace("edge_v: [0, 0.2, 1.2]", "edge_v: [0, 0.2, -1.2]");
+    let err = refused(&bad, line_of("edge_v: [0, 0.2, 1.2]"), "lights[3].keys[1]");
+    assert!(err.contains("edge-on or flip"), "{err}");
 }
 
 #[test]
@@ -412,7 +437,7 @@ fn check_lists_what_moves_and_over_which_frames() {
     let tmp = setup("motion-check", &animated(""));
     // `check` wraps lines past 120 columns under the summary's indent.
     let out = ok(&tmp, &["check", "seq.yaml"]).replace("\n              ", " ");
-    let line = "  moving:     objects[0] (point, normal) frames 0-24; objects[1] (scale, rotate, translate) frames 0-24; objects[2] (center, radius) frames 0-24; lights[0] (position, diffuse) frames 0-24, and 2 more\n";
+    let line = "  moving:     objects[0] (point, normal) frames 0-24; objects[1] (scale, rotate, translate) frames 0-24; objects[2] (center, radius) frames 0-24; lights[0] (position, diffuse) frames 0-24, and 3 more\n";
     assert!(out.contains(line), "{out}");
     // A scene without keys says nothing of it.
     let still = std::fs::read_to_string(repo().join("sequences/talk.yaml")).unwrap();
@@ -459,6 +484,22 @@ fn camera_exports_the_poses_of_moving_things() {
         csv.starts_with("frame,time,direction_x,direction_y,direction_z,inner_angle,outer_angle\n"),
         "{csv}"
     );
+    // A rect light: its corner, looking the way it shines (down), up along edge_v (+z).
+    let rect = ok(
+        &tmp,
+        &[
+            "camera", "seq.yaml", "--light", "3", "--format", "chan", "--frames", "0",
+        ],
+    );
+    assert_eq!(rect, "0 -1.0 2.5 -0.5 -90.0 0.0 180.0\n");
+    // A plane whose normal is keyed gives its texture's axis too.
+    let json = ok(
+        &tmp,
+        &[
+            "camera", "seq.yaml", "--object", "0", "--frames", "0", "--format", "json",
+        ],
+    );
+    assert!(json.contains("\"u_axis\": ["), "{json}");
     // What cannot be exported says why, naming the thing; exit 2.
     let still = animated("").replace("    keys:\n      - { time: 0 }\n      - { time: 1, normal: [0.1, 1, 0.05], point: [0, -0.1, 0] }\n", "");
     std::fs::write(tmp.join("still.yaml"), still).unwrap();
@@ -476,8 +517,8 @@ fn camera_exports_the_poses_of_moving_things() {
             "the sequence has 3 objects",
         ),
         (
-            &["camera", "seq.yaml", "--light", "3"],
-            "the sequence has 3 lights",
+            &["camera", "seq.yaml", "--light", "4"],
+            "the sequence has 4 lights",
         ),
         (
             &["camera", "seq.yaml", "--object", "0", "--format", "chan"],

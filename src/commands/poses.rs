@@ -89,7 +89,8 @@ pub(super) fn lines(
     frames: &FrameSet,
     format: CameraFormat,
 ) -> Result<Vec<String>, Error> {
-    let fields: Vec<Field> = rig.fields().collect();
+    // The keyed fields and what follows from them (a turned plane's u_axis).
+    let fields: Vec<Field> = rig.values_at(0.0).iter().map(|(f, _)| *f).collect();
     let mut out = Vec::new();
     if format == CameraFormat::Csv {
         let columns: Vec<String> = fields.iter().flat_map(|&f| columns(f)).collect();
@@ -157,7 +158,9 @@ fn json_line(n: u64, t: f64, values: &[(Field, DVec3)]) -> String {
 /// it (rotation order ZXY, angles unwrapped across lines as the camera's are). A mesh gives
 /// its placement's translation and rotation (its scale is in csv and json); a sphere, a
 /// sphere light and a point light their centre or position, unturned; a spot and a
-/// directional light a frame looking along their direction (−z), up as near +y as it can be.
+/// directional light a frame looking along their direction (−z), up as near +y as it can be;
+/// a rect light its corner and a frame looking the way it shines (−z along its normal), up
+/// as near its edge_v as it can be.
 fn chan_line(n: u64, rig: &Rig, t: f64, before: &mut Option<[f64; 3]>) -> Result<String, Error> {
     let along = |d: DVec3| zxy_degrees(d, DVec3::Y);
     let (at, turn) = match rig.at(t) {
@@ -174,7 +177,12 @@ fn chan_line(n: u64, rig: &Rig, t: f64, before: &mut Option<[f64; 3]>) -> Result
             Light::Sphere { center, .. } => (center, [0.0; 3]),
             Light::Spot { position, axis, .. } => (position, along(axis)),
             Light::Directional { to_light, .. } => (DVec3::ZERO, along(-to_light)),
-            Light::Rect { corner, .. } => (corner, [0.0; 3]),
+            Light::Rect {
+                corner,
+                normal,
+                edge_v,
+                ..
+            } => (corner, zxy_degrees(normal, edge_v)),
             Light::Ambient { .. } => return Err(no_chan(rig.thing, "an ambient light")),
         },
     };

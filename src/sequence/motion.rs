@@ -4,6 +4,7 @@
 
 use super::timeline::{Frames, ease, increasing, key_time};
 use super::*;
+use crate::scene::area_normal;
 use crate::timeline::Interpolation;
 use crate::timeline::motion::{Field, MeshFrame, Posed, Rig, RigKey, Thing};
 
@@ -38,6 +39,9 @@ pub(super) fn rigs(
         let kind = light_kind(l, &light);
         let how = l.interpolation.map_or(interpolation, interpolation_of);
         let keys = rig_keys(&path, &kind, keys, frames)?;
+        if let Light::Rect { edge_u, edge_v, .. } = light {
+            rect_keys(&path, (edge_u, edge_v), &keys)?;
+        }
         rigs.push(Rig::new(
             Thing::Light(i),
             Posed::Light(light),
@@ -169,10 +173,18 @@ fn light_kind(l: &raw::Light, light: &Light) -> Kind {
             intensity,
         ),
         Light::Rect {
-            corner, intensity, ..
+            corner,
+            edge_u,
+            edge_v,
+            intensity,
+            ..
         } => with(
             "a rect light",
-            vec![("corner", Field::Corner, *corner)],
+            vec![
+                ("corner", Field::Corner, *corner),
+                ("edge_u", Field::EdgeU, *edge_u),
+                ("edge_v", Field::EdgeV, *edge_v),
+            ],
             intensity,
         ),
     }
@@ -206,6 +218,8 @@ fn given(k: &raw::ThingKey) -> Vec<(&'static str, Given)> {
         v("specular", k.specular),
         v("color", k.color),
         v("corner", k.corner),
+        v("edge_u", k.edge_u),
+        v("edge_v", k.edge_v),
     ]
     .into_iter()
     .flatten()
@@ -288,6 +302,7 @@ fn set_value(kp: &str, name: &str, g: Given, values: &mut [(Field, DVec3)]) -> C
     let v = match (name, g) {
         ("scale", Given::Vector(v)) => scale(&p, v)?,
         ("normal" | "direction", Given::Vector(v)) => unit(&p, v)?,
+        ("edge_u" | "edge_v", Given::Vector(v)) => direction(&p, v)?,
         ("ambient" | "diffuse" | "specular" | "color", Given::Vector(v)) => color(&p, v)?,
         (_, Given::Vector(v)) => vector(&p, v)?,
         ("radius", Given::Number(r)) => DVec3::new(
@@ -337,6 +352,8 @@ fn field_of(name: &str) -> Field {
         "specular" => Field::Specular,
         "color" => Field::Color,
         "corner" => Field::Corner,
+        "edge_u" => Field::EdgeU,
+        "edge_v" => Field::EdgeV,
         _ => Field::Angles,
     }
 }
@@ -413,7 +430,7 @@ fn between(kp: &str, i: usize, a: &RigKey, b: &RigKey) -> Check<()> {
 
 /// How the loader placed a mesh that has keys, or None for a sphere or plane. `fit` and
 /// `origin: center|bottom` are worked out for one pose, so they refuse keys on scale and
-/// rotate; a plane's `u_axis` likewise refuses keys on its normal.
+/// rotate.
 fn mesh_frame(
     path: &str,
     o: &raw::Object,
@@ -422,15 +439,6 @@ fn mesh_frame(
     keys: &[raw::ThingKey],
 ) -> Check<Option<MeshFrame>> {
     let turned = |k: &raw::ThingKey| k.scale.is_some() || k.rotate.is_some();
-    if let Some(p) = &o.plane
-        && p.u_axis.is_some()
-        && let Some(i) = keys.iter().position(|k| k.normal.is_some())
-    {
-        return invalid(
-            format!("{path}.keys[{i}].normal"),
-            "a plane with `u_axis` cannot key its normal (the texture's axis is projected once); remove one of them",
-        );
-    }
     let (Some(m), Shape::Mesh { mesh, place, .. }) = (&o.mesh, object.shape) else {
         return Ok(None);
     };
@@ -452,4 +460,56 @@ fn mesh_frame(
     let model = &scene.meshes[mesh];
     let offset = meshes::origin_offset(model, place.scale, place.rotation, origin);
     Ok(Some(MeshFrame { up, offset }))
+}
+
+/// A rect light's keyed edges span an area at every key and at every pose between two keys:
+/// on a segment the edges are (1−s)·a + s·b and (1−s)·c + s·d for some s in [0, 1], whose
+/// cross product is (1−s)²·A + s(1−s)·B + s²·C; its component along the first key's normal
+/// must stay positive, so the rectangle never turns edge-on or flips between keys.
+fn rect_keys(path: &str, still: (DVec3, DVec3), keys: &[RigKey]) -> Check<()> {
+    let edges = |k: &RigKey| {
+        let get = |f: Field, or: DVec3| k.values.iter().find(|(g, _)| *g == f).map_or(or, |v| v.1);
+        (get(Field::EdgeU, still.0), get(Field::EdgeV, still.1))
+    };
+    for (i, k) in keys.iter().enumerate() {
+        let (u, v) = edges(k);
+        let (_, length) = area_normal(u, v);
+        if !(length > 0.0 && length.is_finite()) {
+            return invalid(
+                format!("{path}.keys[{i}].edge_v"),
+                format!(
+                    "must not be parallel to edge_u: the rectangle needs an area, |edge_u × edge_v| finite and non-zero {}",
+                    got(format!("{} × {}", num3(u), num3(v)))
+                ),
+            );
+        }
+    }
+    for (i, pair) in keys.windows(2).enumerate() {
+        if !keeps_area(edges(&pair[0]), edges(&pair[1])) {
+            return invalid(
+                format!("{path}.keys[{}]", i + 1),
+                format!(
+                    "the rect light's edges would turn edge-on or flip between keys {i} and {}: add a key between",
+                    i + 1
+                ),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Whether f(s) = (1−s)²·α + s(1−s)·β + s²·γ stays positive on [0, 1], with α, β, γ the
+/// components of A = a × c, B = a × d + b × c and C = b × d along n, the unit normal of A,
+/// each divided by the largest of the three in size (docs/spec/motion.md): γ > 0 and, where the parabola f = α + l·s + q·s² (l = β − 2α,
+/// q = (α − β) + γ) has its lowest point inside (q > 0 and 0 < −l < 2q), l·l < 4·q·α.
+fn keeps_area((a, c): (DVec3, DVec3), (b, d): (DVec3, DVec3)) -> bool {
+    let (cross, length) = area_normal(a, c);
+    let n = cross * (1.0 / length);
+    let f = [a.cross(c), a.cross(d) + b.cross(c), b.cross(d)].map(|v| v.dot(n));
+    // Scaled to at most 1 in size, so the products below neither overflow nor underflow.
+    let big = f.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let [alpha, beta, gamma] = f.map(|x| x / big);
+    let (l, q) = (beta - 2.0 * alpha, (alpha - beta) + gamma);
+    let inside = q > 0.0 && 0.0 < -l && -l < 2.0 * q;
+    gamma > 0.0 && (!inside || l * l < 4.0 * q * alpha)
 }

@@ -329,6 +329,8 @@ pub struct ThingKey {
     pub specular: Option<V3>,
     pub color: Option<V3>,
     pub corner: Option<V3>,
+    pub edge_u: Option<V3>,
+    pub edge_v: Option<V3>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -206,8 +206,8 @@ fn plane(path: &str, s: &raw::Plane) -> Check<Shape> {
         Some(a) => {
             let field = format!("{path}.u_axis");
             let a = unit(&field, a)?;
-            let along = a - normal * a.dot(normal);
-            if along.length() < 1e-6 {
+            let (along, length) = crate::scene::plane_axis(a, normal);
+            if length < 1e-6 {
                 return invalid(
                     &field,
                     format!(
@@ -349,26 +349,13 @@ pub(super) fn sphere_light(path: &str, s: &raw::SphereLight) -> Check<Light> {
     })
 }
 
-/// edge_u × edge_v and its length; where that length overflows or underflows (edges near
-/// 1e100 or 1e-100), the same direction from the edges each divided by its largest component,
-/// so perpendicular edges of any length are never taken for parallel ones.
-fn area_normal(u: DVec3, v: DVec3) -> (DVec3, f64) {
-    let cross = u.cross(v);
-    let length = cross.length();
-    if length > 0.0 && length.is_finite() {
-        return (cross, length);
-    }
-    let cross = (u / u.abs().max_element()).cross(v / v.abs().max_element());
-    (cross, cross.length())
-}
-
 /// A rect light: its edges must span a parallelogram whose normal edge_u × edge_v has a
 /// finite, non-zero length (so it can be normalised).
 pub(super) fn rect_light(path: &str, r: &raw::RectLight) -> Check<Light> {
     let corner = vector(&format!("{path}.corner"), r.corner)?;
     let edge_u = direction(&format!("{path}.edge_u"), r.edge_u)?;
     let edge_v = direction(&format!("{path}.edge_v"), r.edge_v)?;
-    let (cross, length) = area_normal(edge_u, edge_v);
+    let (cross, length) = crate::scene::area_normal(edge_u, edge_v);
     if !(length > 0.0 && length.is_finite()) {
         return invalid(
             format!("{path}.edge_v"),

@@ -13,7 +13,7 @@
 
 use super::track::{Timing, Track};
 use super::{Ease, Interpolation};
-use crate::scene::{Light, Object, Placement, Shape, rotation};
+use crate::scene::{Light, Object, Placement, Shape, area_normal, plane_axis, rotation, turned};
 use glam::{DMat3, DVec3};
 
 /// A field a key can set. Its value is a 3-vector (a number in x; a spot's two angles in x
@@ -36,6 +36,12 @@ pub enum Field {
     Specular,
     Color,
     Corner,
+    /// A rect light's edges: its normal follows them.
+    EdgeU,
+    EdgeV,
+    /// Not keyed: a plane's `u_axis` where its normal is keyed, turned with the normal (what
+    /// `rayreel camera --object` prints so a still scene can write it).
+    UAxis,
 }
 
 impl Field {
@@ -57,6 +63,9 @@ impl Field {
             Field::Specular => "specular",
             Field::Color => "color",
             Field::Corner => "corner",
+            Field::EdgeU => "edge_u",
+            Field::EdgeV => "edge_v",
+            Field::UAxis => "u_axis",
         }
     }
 
@@ -159,14 +168,43 @@ impl Rig {
         }
     }
 
-    /// The keyed fields' values at time t, in the rig's field order.
+    /// The keyed fields' values at time t, in the rig's field order, then a plane's turned
+    /// `u_axis` where its normal is keyed.
     pub fn values_at(&self, t: f64) -> Vec<(Field, DVec3)> {
-        self.tracks.iter().map(|(f, k)| (*f, k.at(t).0)).collect()
+        let mut values: Vec<(Field, DVec3)> =
+            self.tracks.iter().map(|(f, k)| (*f, k.at(t).0)).collect();
+        if let Some(a) = self.track(Field::Normal, t).and_then(|n| self.axis(n)) {
+            values.push((Field::UAxis, a));
+        }
+        values
     }
 
     /// The fields this rig keys.
     pub fn fields(&self) -> impl Iterator<Item = Field> + '_ {
         self.tracks.iter().map(|(f, _)| *f)
+    }
+
+    fn track(&self, field: Field, t: f64) -> Option<DVec3> {
+        let (_, track) = self.tracks.iter().find(|(f, _)| *f == field)?;
+        Some(track.at(t).0)
+    }
+
+    /// A textured plane's `u_axis` when its normal's track is at `v`: the still plane's axis
+    /// turned by the shortest turn from the still normal to v.normalize() (None for other
+    /// things, and for a plane without `u_axis`).
+    fn axis(&self, v: DVec3) -> Option<DVec3> {
+        match self.base {
+            Posed::Object(Object {
+                shape:
+                    Shape::Plane {
+                        normal,
+                        u_axis: Some(u),
+                        ..
+                    },
+                ..
+            }) => Some(turned(u, normal, v.normalize())),
+            _ => None,
+        }
     }
 
     /// The object or light at time t: the thing as written with each keyed field replaced
@@ -181,7 +219,42 @@ impl Rig {
         {
             *place = placement(self, m, place, t);
         }
+        self.derived(&mut posed, t);
         posed
+    }
+
+    /// What the loader works out from keyed fields: a textured plane's axis from its turned
+    /// `u_axis` (as `rayreel camera` prints it), a rect's normal from its edges.
+    fn derived(&self, posed: &mut Posed, t: f64) {
+        match posed {
+            Posed::Object(Object {
+                shape:
+                    Shape::Plane {
+                        normal,
+                        u_axis: Some(u),
+                        ..
+                    },
+                ..
+            }) => {
+                if let Some(a) = self.track(Field::Normal, t).and_then(|v| self.axis(v)) {
+                    *u = plane_axis(a.normalize(), *normal).0.normalize();
+                }
+            }
+            Posed::Light(Light::Rect {
+                edge_u,
+                edge_v,
+                normal,
+                ..
+            }) => {
+                let (cross, length) = area_normal(*edge_u, *edge_v);
+                // The keys keep an area between them (checked at load); rounding at a
+                // near-degenerate pose keeps the last good normal rather than a NaN.
+                if length > 0.0 && length.is_finite() {
+                    *normal = cross * (1.0 / length);
+                }
+            }
+            _ => {}
+        }
     }
 }
 
@@ -236,6 +309,8 @@ fn set_light(light: &mut Light, field: Field, v: DVec3) {
         (Sphere { center, .. }, Field::Center) => *center = v,
         (Sphere { radius, .. }, Field::Radius) => *radius = v.x,
         (Rect { corner, .. }, Field::Corner) => *corner = v,
+        (Rect { edge_u, .. }, Field::EdgeU) => *edge_u = v,
+        (Rect { edge_v, .. }, Field::EdgeV) => *edge_v = v,
         (Directional { to_light, .. }, Field::Direction) => *to_light = -v.normalize(),
         (Spot { axis, .. }, Field::Direction) => *axis = v.normalize(),
         (

@@ -15,7 +15,7 @@ use super::{Settings, World, shade};
 use crate::camera::{Camera, screen_point};
 pub use crate::frame::Passes;
 use crate::lanes::{F64x1, V3};
-use crate::scene::{Object, Scene, Shape};
+use crate::scene::{Object, Scene, Shape, turned};
 use crate::settings::Aov;
 use crate::shutter::Next;
 use crate::timeline::motion::{Posed, Thing};
@@ -194,19 +194,6 @@ fn carried(p: DVec3, now: &Object, then: &Object) -> DVec3 {
         ) => b + turned(p - a, na, nb),
         _ => p,
     }
-}
-
-/// v turned by the shortest rotation that takes the unit vector n to the unit vector m
-/// (Rodrigues' formula with c = n × m and d = n·m, which are the axis times sin and the cos of
-/// the angle): v·d + c × v + c·((c·v)/(1 + d)); v itself when 1 + d ≤ 1e-9 (n and m opposite:
-/// no shortest turn).
-fn turned(v: DVec3, n: DVec3, m: DVec3) -> DVec3 {
-    let (c, d) = (n.cross(m), n.dot(m));
-    // Not `1 + d > 1e-9` (NaN included): no turn.
-    if (1.0 + d).partial_cmp(&1e-9) != Some(std::cmp::Ordering::Greater) {
-        return v;
-    }
-    v * d + c.cross(v) + c * (c.dot(v) / (1.0 + d))
 }
 
 /// Where `q` (p one frame later) is in the image of `next` minus where p is in the image of
