@@ -9,7 +9,7 @@ use crate::output::{Compression, ExrPrecision, FileFormat};
 use crate::scene::{Image, Light, Scene, Shape, Sky, Texture};
 use crate::sequence::{self, Sequence};
 use crate::settings::Settings;
-use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline, motion::Thing};
+use crate::timeline::{Ease, Path as TimelinePath, Speed, Timeline};
 
 pub(super) fn check(args: CheckArgs) -> Result<(), Error> {
     let seq = sequence::load_with(&args.file, &super::assets(&args.assets)?)?;
@@ -499,10 +499,7 @@ fn moving(t: &Timeline) -> String {
         .iter()
         .take(SHOWN)
         .map(|rig| {
-            let name = match rig.thing {
-                Thing::Object(i) => format!("objects[{i}]"),
-                Thing::Light(i) => format!("lights[{i}]"),
-            };
+            let name = rig.thing;
             let fields: Vec<&str> = rig.fields().map(|f| f.name()).collect();
             let (first, last) = (rig.times[0], rig.times[rig.times.len() - 1]);
             format!(

@@ -37,7 +37,7 @@ pub(super) fn find<'a>(
         Some(rig) => Ok(Some(rig)),
         None => Err(Error::Usage(format!(
             "{} has no keys: it holds still at the values written in the file",
-            label(thing)
+            thing
         ))),
     }
 }
@@ -73,13 +73,6 @@ fn object_index(seq: &Sequence, sel: &str) -> Result<usize, Error> {
             "--object {sel}: no object is named `{sel}` ({known}); give a name or an index from 0"
         ))
     })
-}
-
-fn label(thing: Thing) -> String {
-    match thing {
-        Thing::Object(i) => format!("objects[{i}]"),
-        Thing::Light(i) => format!("lights[{i}]"),
-    }
 }
 
 /// The lines `camera` prints for `rig` over `frames` (a CSV header first).
@@ -196,6 +189,6 @@ fn chan_line(n: u64, rig: &Rig, t: f64, before: &mut Option<[f64; 3]>) -> Result
 fn no_chan(thing: Thing, what: &str) -> Error {
     Error::Usage(format!(
         "{} is {what}: a chan file has no place for it; use --format json or csv",
-        label(thing)
+        thing
     ))
 }

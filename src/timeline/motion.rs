@@ -93,6 +93,16 @@ pub enum Thing {
     Light(usize),
 }
 
+/// The thing as the file's paths name it: `objects[i]` or `lights[i]`.
+impl std::fmt::Display for Thing {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Thing::Object(i) => write!(f, "objects[{i}]"),
+            Thing::Light(i) => write!(f, "lights[{i}]"),
+        }
+    }
+}
+
 /// What a mesh placement needs beyond its keyed fields: how the loader folds `up` and
 /// `origin` in (`fit` is refused together with keys on scale or rotate).
 #[derive(Debug, Clone, Copy, PartialEq)]
