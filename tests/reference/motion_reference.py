@@ -1,22 +1,28 @@
 #!/usr/bin/env python3
 # An independent implementation of frames with moving objects and lights, written from
 # docs/spec/motion.md, docs/spec/timeline.md, docs/spec/tracer.md, docs/spec/mesh.md,
-# docs/spec/f32.md, docs/spec/output.md and docs/sequence-file.md ("Things that move") alone,
-# never from rayreel's code. It builds on the other references (imported, not copied):
+# docs/spec/f32.md, docs/spec/output.md, docs/spec/texture.md and docs/sequence-file.md ("Things
+# that move") alone, never from rayreel's code. It builds on the other references (imported, not
+# copied):
 #   - camera_reference.py: the tracks of timeline.md (centripetal Catmull-Rom shapes with their
 #     Gauss-Legendre arc length, Fritsch-Carlson rates m_k, stops, turn-backs);
 #   - mesh_reference.py: the f64 tracer (spheres, planes, OBJ meshes and their placement,
 #     point / directional / spot / ambient lights, paths);
 #   - film_reference.py: film frames' Owen-scrambled Sobol' points and seeds, the rounds of
 #     adaptive sampling and the film filter; with film_f32_reference.py, lens frames of a posed
-#     scene in f64 and f32 (their scene globals set to the poses at t).
+#     scene in f64 and f32 (their scene globals set to the poses at t);
+#   - texture_reference.py: image maps on planes (the footprint cone, the lookup), used for posed
+#     scenes whose materials have maps (the posed scene at t is a still scene).
 # What it adds (motion.md): keys -> key values (carried over, first key from the still thing,
 # normals and directions normalised, numbers as (r, 0, 0), a spot's angles one track), key
 # times (`time: x`, `time: a/b`, `frame: n`, fractional fps and first_frame), the thing at time
 # t (a mesh's up axis and origin offset included), the shutter's 256 instants and which frames
 # become film frames because things (or the camera) move while the shutter is open, each sample
 # traced in the scene posed at its own instant; and, since mesh_reference has none, sphere and
-# rect area lights (tracer.md "Area lights"), keyed like the others. f32.md: a frame whose
+# rect area lights (tracer.md "Area lights"), keyed like the others: a rect's edges are straight
+# tracks and its normal at each pose comes from the rect normal rule on the posed edges; a plane
+# with `u_axis` whose normal is keyed gets its axis turned by output.md's shortest turn from the
+# still normal, then loaded as a written u_axis (motion.md "The thing at time t"). f32.md: a frame whose
 # things move while the shutter is open is traced in f64, so `blur_f32` must equal f64 bytes.
 #
 # Where the docs leave an f64 operation order open (tracks' formulas), this file states the
@@ -36,11 +42,13 @@ sys.path.insert(0, HERE)
 import camera_reference as cr  # noqa: E402
 import film_reference as fr  # noqa: E402
 import mesh_reference as mr  # noqa: E402
+import texture_reference as tex  # noqa: E402  (before the mesh-file cache below: it subclasses mr.MeshFile)
 import importlib  # noqa: E402
 from mesh_reference import normalize  # noqa: E402
 
 MOTIONDIR = os.path.join(HERE, 'motion')
 mr.MESHDIR = MOTIONDIR
+tex.TEXDIR = MOTIONDIR  # the image maps of the motion cases live beside them
 
 # mesh files are read once, whatever the number of posed scenes built from them
 _MESH_FILES = {}
@@ -84,7 +92,8 @@ FIELDS = {
              'ambient': 'ambient', 'diffuse': 'diffuse', 'specular': 'specular'},
     'ambient': {'color': 'color'},
     'light:sphere': {'center': 'center', 'radius': 'radius', 'ambient': 'ambient', 'diffuse': 'diffuse', 'specular': 'specular'},
-    'light:rect': {'corner': 'corner', 'ambient': 'ambient', 'diffuse': 'diffuse', 'specular': 'specular'},
+    'light:rect': {'corner': 'corner', 'edge_u': 'edge_u', 'edge_v': 'edge_v',
+                   'ambient': 'ambient', 'diffuse': 'diffuse', 'specular': 'specular'},
 }
 CURVED = {'mesh': {'rotate', 'translate'}, 'sphere': {'center'}, 'plane': {'point'}, 'point': {'position'},
           'directional': set(), 'spot': {'position'}, 'ambient': set(), 'light:sphere': {'center'}, 'light:rect': {'corner'}}
@@ -257,9 +266,54 @@ def posed_scene(d, things, t, camera=None):
         poses.append(p)
         (kind, fields), = s['objects' if th.tag == 0 else 'lights'][th.index].items()
         fields.update(p)
+        if kind == 'plane' and 'u_axis' in fields and 'normal' in p:
+            fields['u_axis'] = list(plane_axis_at(th.still, p['normal']))
+        if kind == 'rect' and th.tag == 1 and rect_normal(fields['edge_u'], fields['edge_v']) is None:
+            # motion.md: an ℓ rounding to 0 or to no number at a pose keeps the still light's normal
+            fields['normal_kept'] = rect_normal(th.still['edge_u'], th.still['edge_v'])
     if camera is not None:
         s['camera'] = camera
     return s, poses
+
+
+def turned(v, n, n2):
+    """output.md "forward.u/v", a plane's shortest turn from unit normal n to n2, applied to v:
+    c = n × n2, d = n·n2, w = (v·d + c × v) + c·((c·v)/(1 + d)) per component; v itself when
+    1 + d ≤ 1e-9 (or NaN)."""
+    c, d = mr.cross(n, n2), mr.dot(n, n2)
+    if not (1.0 + d > 1e-9):
+        return tuple(v)
+    k = mr.dot(c, v) / (1.0 + d)
+    return mr.add(mr.add(mr.vmul(v, d), mr.cross(c, v)), mr.vmul(c, k))
+
+
+def plane_axis_at(still, v_normal):
+    """motion.md "The thing at time t": a plane with `u_axis` whose normal is keyed gets the
+    written axis a = turned(U, N0, N), U and N0 the still plane's axis and unit normal as the
+    loader built them (texture.md "Coordinates": normalize(a' − N0·(a'·N0)), a' the written axis
+    made unit), N = v_normal.normalize(); the loader (texture_reference.TexScene) then makes of
+    a what it makes of a written u_axis."""
+    N0 = normalize(vec(still['normal']))
+    a = normalize(vec(still['u_axis']))
+    U = normalize(mr.sub(a, mr.vmul(N0, mr.dot(a, N0))))
+    return turned(U, N0, normalize(vec(v_normal)))
+
+
+def rect_normal(u, v):
+    """tracer.md "Area lights", the rect normal rule: w = u × v, ℓ = |w|; when ℓ is not both > 0
+    and finite, w = (u/m_u) × (v/m_v) (m the largest |component|) and ℓ = |w| again; n = w·(1/ℓ)
+    per component, or None when ℓ is still not finite and > 0."""
+    u, v = vec(u), vec(v)
+    w = mr.cross(u, v)
+    ell = math.sqrt(mr.dot(w, w))
+    if not (ell > 0 and math.isfinite(ell)):
+        mu, mv = max(abs(c) for c in u), max(abs(c) for c in v)
+        w = mr.cross([c / mu for c in u], [c / mv for c in v])
+        ell = math.sqrt(mr.dot(w, w))
+        if not (ell > 0 and math.isfinite(ell)):
+            return None
+    r = 1.0 / ell
+    return (w[0] * r, w[1] * r, w[2] * r)
 
 
 def camera_tracks(d, clock):
@@ -357,7 +411,7 @@ class AreaScene(mr.Scene):
                 li.update(C=tuple(map(float, o['center'])), R=float(o['radius']))
             elif kind == 'rect':
                 c, u, v = (tuple(map(float, o[k])) for k in ('corner', 'edge_u', 'edge_v'))
-                li.update(c=c, u=u, v=v, n=normalize(mr.cross(u, v)))
+                li.update(c=c, u=u, v=v, n=tuple(o['normal_kept']) if 'normal_kept' in o else rect_normal(u, v))
             else:
                 raise NotImplementedError('area-light scenes take sphere, rect and ambient lights')
             self.lights.append(li)
@@ -425,6 +479,14 @@ class AreaScene(mr.Scene):
         return local
 
 
+class AreaTexScene(AreaScene, tex.TexScene):
+    """Area lights on texture_reference's tracer (its cone and lookups, AreaScene's light loop)."""
+
+
+# the posed scene at t is a still scene: image maps (texture.md) by texture_reference's tracer
+SCENE_CLASSES = {(False, False): mr.Scene, (True, False): AreaScene, (False, True): tex.TexScene, (True, True): AreaTexScene}
+
+
 # ---------------------------------------------------------------- frames (motion.md "Frames, the shutter and samples")
 def unit(b):
     return float(b >> 11) * 2.0 ** -53
@@ -458,7 +520,8 @@ class Frame:
             c = camera_at(self.cams, t) if self.cams else None
             posed = posed_scene(self.d, self.things, t, c)[0]
             area = any(k in l for l in posed['lights'] for k in ('sphere', 'rect'))
-            self._scenes[m] = (AreaScene if area else mr.Scene)(posed)
+            maps = any(isinstance(mat.get(k), dict) for mat in posed['materials'].values() for k in ('diffuse', 'ambient'))
+            self._scenes[m] = SCENE_CLASSES[area, maps](posed)
             place_meshes(self._scenes[m], posed)
         return self._scenes[m]
 
@@ -582,17 +645,18 @@ def render_lens(d, n):
 
 # ---------------------------------------------------------------- the cases
 MATS = {k: mr.MATERIALS[k] for k in ('clay', 'blue', 'green', 'gold', 'floor', 'mirror', 'glass')}
+TEX_MATS = dict(MATS, rgb8=tex.MATERIALS['rgb8'])  # an 8-bit sRGB image in diffuse and ambient
 LIGHTS = copy.deepcopy(mr.LIGHTS)
 FLOOR = {'plane': {'point': [0, -1, 0], 'normal': [0, 1, 0], 'material': 'floor'}}
 CAMERA = {'position': [0, 1.2, 5], 'look_at': [0, -0.1, 0], 'fov': 60}
 
 
-def case(objects, lights=LIGHTS, w=48, h=27, camera=CAMERA, **render):
+def case(objects, lights=LIGHTS, w=48, h=27, camera=CAMERA, materials=MATS, **render):
     r = {'width': w, 'height': h, 'samples': 1, 'encoding': 'linear', 'max_depth': 3,
          'background': [0.05, 0.07, 0.1]}
     r.update(render)
     r = {k: v for k, v in r.items() if v is not None}
-    return {'render': r, 'camera': copy.deepcopy(camera), 'materials': MATS,
+    return {'render': r, 'camera': copy.deepcopy(camera), 'materials': materials,
             'objects': copy.deepcopy(objects), 'lights': copy.deepcopy(lights)}
 
 
@@ -701,6 +765,27 @@ AREA_LIGHTS = [
     {'ambient': {'color': [0.03, 0.03, 0.04]}},
 ]
 
+# a rect light whose edges turn (straight tracks under smooth timing) while its corner moves:
+# its normal at each pose by the rect normal rule from the posed edges (motion.md)
+AREA_EDGES = [
+    {'rect': {'corner': [1, 3, -1], 'edge_u': [1.2, 0, 0], 'edge_v': [0, -0.3, 1.2], 'ambient': [0.05, 0.05, 0.05],
+              'diffuse': [0.9, 0.7, 0.5], 'specular': [0.6, 0.6, 0.6], 'samples': 3},
+     'keys': [{'time': 0.25},
+              {'time': 1, 'corner': [0, 3, 0], 'edge_u': [1.0, 0.3, 0.4], 'edge_v': [-0.2, -0.5, 1.0]},
+              {'time': 2, 'edge_u': [-0.3, 0.2, 1.3], 'edge_v': [-1.1, -0.2, 0.1], 'ease': 'stop'}]},
+    {'ambient': {'color': [0.04, 0.04, 0.05]}},
+]
+# an image-mapped wall with u_axis whose normal is keyed: its texture's axis turns with it by the
+# shortest turn from the still normal (motion.md); the mirror-ish floor sees it reflected
+PLANE_AXIS = [
+    FLOOR,
+    {'plane': {'point': [0, 0, -3], 'normal': [0, 0.2, 1], 'u_axis': [1, 0.5, 0], 'material': 'rgb8'},
+     'keys': [{'time': 0},
+              {'time': 1, 'normal': [0.5, 0.3, 1]},
+              {'time': 2, 'normal': [-0.4, 0.1, 1], 'point': [0, 0, -2.5]}]},
+    {'sphere': {'center': [-0.9, -0.3, 0], 'radius': 0.7, 'material': 'clay'}},
+]
+
 # a lens (film frame without a shutter), still in f32: the poses at t, then f32.md's
 # camera-relative rounding; the same frame in f64
 LENS = [
@@ -721,6 +806,12 @@ CASES = {
     'area': (case(STILL_OBJECTS, lights=AREA_LIGHTS, w=40, h=24), [0, 18, 30, 48]),
     # a rect light sweeping under an open shutter: each sample's points at its own instant, k
     'area_blur': (case(STILL_OBJECTS, lights=AREA_LIGHTS, w=32, h=18, shutter=180, samples=4, denoise=False), [20]),
+    # rect edges keyed: still frames, and a sweep under an open shutter (each instant its own normal)
+    'area_edges': (case(STILL_OBJECTS, lights=AREA_EDGES, w=40, h=24), [12, 36]),
+    'area_edges_blur': (case(STILL_OBJECTS, lights=AREA_EDGES, w=32, h=18, shutter=180, samples=4, denoise=False), [36]),
+    # a plane with u_axis and a keyed normal (a key at frame 0: turned by the zero turn), 1 and 4 samples
+    'plane_axis': (case(PLANE_AXIS, w=40, h=24, materials=TEX_MATS), [0, 18, 40]),
+    'plane_axis_s4': (case(PLANE_AXIS, w=32, h=18, materials=TEX_MATS, samples=4), [30]),
     # a point light sweeping and changing colour under an open shutter
     'lights_blur': (case(STILL_OBJECTS, lights=LIGHTS_KEYED, w=32, h=18, shutter=180, samples=4, denoise=False), [12]),
     'glass_blur': (case(GLASS, w=32, h=18, shutter=180, samples=4, denoise=False, max_depth=5), [6]),
