@@ -15,7 +15,7 @@
 //! lookups are), so a lane's colour is the same for every packet width.
 
 use super::World;
-use super::texture::trilinear;
+use super::texture::{floor, trilinear};
 use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{Image, Level, Sky};
 use glam::DVec3;
@@ -109,9 +109,9 @@ fn equirect(image: &Image, rotate: f64, d: DVec3, spread: f64) -> DVec3 {
 /// along v: texel (i, j)'s centre is at u = (i + 0.5)/width, v = 1 − (j + 0.5)/height.
 fn bilinear(level: &Level, u: f64, v: f64) -> DVec3 {
     let (w, h) = (f64::from(level.width), f64::from(level.height));
-    let x = (u - u.floor()) * w - 0.5;
+    let x = (u - floor(u)) * w - 0.5;
     let y = (1.0 - v) * h - 0.5;
-    let (x0, y0) = (x.floor(), y.floor());
+    let (x0, y0) = (floor(x), floor(y));
     let (fx, fy) = (x - x0, y - y0);
     let i0 = (x0 as i64).rem_euclid(i64::from(level.width)) as u32;
     let i1 = (i0 + 1) % level.width;

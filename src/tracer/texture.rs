@@ -102,7 +102,13 @@ pub(super) struct At {
 pub(super) fn color(world: &World, texture: &Texture, at: &At) -> DVec3 {
     let scene = world.unshifted.as_deref().unwrap_or(&world.scene);
     let p = point(scene, at);
-    let f = Footprint::of(at);
+    let mut f = Footprint::of(at);
+    if let Texture::Checker { size, colors } = texture {
+        if let Some(c) = one_cell(*size, colors, p, &f) {
+            return c;
+        }
+        f.taps = checker_taps(f.taps, at.r, *size);
+    }
     let mut sum = DVec3::ZERO;
     for k in 0..f.taps {
         let step = (f64::from(2 * k + 1) - f64::from(f.taps)) / f64::from(f.taps);
@@ -119,6 +125,41 @@ pub(super) fn color(world: &World, texture: &Texture, at: &At) -> DVec3 {
         };
     }
     sum / f64::from(f.taps)
+}
+
+/// The checker's colour when the whole footprint lies in one cell: the box of half-extent
+/// |majorᵢ| + |minorᵢ| around `p` holds every tap's box, so every tap would see that cell
+/// alone and the average is its colour. Most lookups near the camera end here, without taps.
+fn one_cell(size: f64, colors: &[DVec3; 2], p: DVec3, f: &Footprint) -> Option<DVec3> {
+    let (p, major, minor) = (p.to_array(), f.major.to_array(), f.minor.to_array());
+    let mut a = 1.0;
+    for i in 0..3 {
+        let x = p[i] / size;
+        let h = (major[i].abs() + minor[i].abs()) / size;
+        let k = if h < TINY_BOX {
+            floor(x)
+        } else {
+            let k = floor(x - h);
+            if k != floor(x + h) {
+                return None;
+            }
+            k
+        };
+        a *= sign(k);
+    }
+    Some(if a > 0.0 { colors[0] } else { colors[1] })
+}
+
+/// Footprints at least this many cells across (the disc's radius over the cell size) take
+/// the checker in one tap.
+pub const WIDE_FOOTPRINT: f64 = 0.5;
+
+/// The checker's taps: one where the footprint's radius `r` spans `WIDE_FOOTPRINT` cells of
+/// size `size` or more. Taps keep a long footprint from blurring across itself; once the
+/// footprint is that wide each tap averages out to nearly the checker's mean, and so does the
+/// one box around the whole ellipse, at a sixteenth of the work near the horizon.
+fn checker_taps(taps: u32, r: f64, size: f64) -> u32 {
+    if r >= WIDE_FOOTPRINT * size { 1 } else { taps }
 }
 
 /// The point a lookup uses, from the scene in world coordinates: on a mesh the barycentric
@@ -232,28 +273,48 @@ fn checker(size: f64, colors: &[DVec3; 2], tap: &Tap) -> DVec3 {
     colors[0] * (0.5 + 0.5 * a) + colors[1] * (0.5 - 0.5 * a)
 }
 
+/// ⌊x⌋, bit for bit what `f64::floor` gives (−0 included), without its call: the kernels'
+/// scalar code is built for the baseline x86-64, which has no rounding instruction, and the
+/// library's floor cost the checker a third of its frame (each tap takes up to a dozen).
+#[inline(always)]
+pub fn floor(x: f64) -> f64 {
+    // Beyond 2⁵² every f64 is an integer (and NaN and ±∞ are their own floor).
+    if !(x.abs() < 4_503_599_627_370_496.0) {
+        return x;
+    }
+    let t = x as i64 as f64;
+    let t = if t > x { t - 1.0 } else { t };
+    t.copysign(x)
+}
+
 /// Half-widths below this many cells count as 0.
 pub const TINY_BOX: f64 = 1e-12;
+
+/// S on cell k (a whole number, or ±∞ or NaN): +1 where k is even, −1 where it is odd; this
+/// is the spec's k − 2⌊k/2⌋ == 0 without its floor. Below 2⁵³ the test is the integer's
+/// parity, every finite f64 beyond is even, and ±∞ and NaN count as odd (the spec's
+/// difference is NaN there).
+fn sign(k: f64) -> f64 {
+    let even = if k.abs() < 9_007_199_254_740_992.0 {
+        k as i64 & 1 == 0
+    } else {
+        k.is_finite()
+    };
+    if even { 1.0 } else { -1.0 }
+}
 
 /// The average over [x − h, x + h] of S(u) = +1 where ⌊u⌋ is even, −1 where it is odd.
 pub fn square_average(x: f64, h: f64) -> f64 {
     if h.is_nan() || h == f64::INFINITY {
         return 0.0;
     }
-    let sign = |k: f64| {
-        if k - 2.0 * (k / 2.0).floor() == 0.0 {
-            1.0
-        } else {
-            -1.0
-        }
-    };
     // A box this narrow is rounding noise (a floor's extent along its own normal): a point
     // sample, so a surface lying on a cell boundary takes the cell above it.
     if h < TINY_BOX {
-        return sign(x.floor());
+        return sign(floor(x));
     }
     let (a, b) = (x - h, x + h);
-    let (ka, kb) = (a.floor(), b.floor());
+    let (ka, kb) = (floor(a), floor(b));
     if ka == kb {
         sign(ka)
     } else if kb == ka + 1.0 {
@@ -265,7 +326,7 @@ pub fn square_average(x: f64, h: f64) -> f64 {
 
 /// ∫₀ᵘ S: the triangle wave f for f = u − 2⌊u/2⌋ < 1, else 2 − f.
 fn triangle(u: f64) -> f64 {
-    let f = u - 2.0 * (u / 2.0).floor();
+    let f = u - 2.0 * floor(u / 2.0);
     if f < 1.0 { f } else { 2.0 - f }
 }
 
@@ -362,7 +423,7 @@ pub(super) fn trilinear(image: &Image, texels: f64, sample: impl Fn(&Level) -> D
     if lod.is_nan() || lod >= last as f64 {
         return sample(&image.levels[last]);
     }
-    let l = lod.floor();
+    let l = floor(lod);
     let f = lod - l;
     let c = sample(&image.levels[l as usize]);
     if f == 0.0 {
@@ -375,9 +436,9 @@ pub(super) fn trilinear(image: &Image, texels: f64, sample: impl Fn(&Level) -> D
 /// u = (i + 0.5)/width, v = 1 − (j + 0.5)/height (row 0 at the top, v = 1).
 pub fn bilinear(level: &Level, u: f64, v: f64) -> DVec3 {
     let (w, h) = (f64::from(level.width), f64::from(level.height));
-    let x = (u - u.floor()) * w - 0.5;
-    let y = (1.0 - (v - v.floor())) * h - 0.5;
-    let (x0, y0) = (x.floor(), y.floor());
+    let x = (u - floor(u)) * w - 0.5;
+    let y = (1.0 - (v - floor(v))) * h - 0.5;
+    let (x0, y0) = (floor(x), floor(y));
     let (fx, fy) = (x - x0, y - y0);
     let wrap = |i: f64, n: u32| (i as i64).rem_euclid(i64::from(n)) as u32;
     let (i0, j0) = (wrap(x0, level.width), wrap(y0, level.height));
@@ -452,6 +513,76 @@ mod tests {
             );
         }
         assert!(square_average(0.3, 1e6).abs() < 1e-6);
+    }
+
+    /// The inlined floor gives f64::floor's bits, signed zeros and the edges of f64 included.
+    #[test]
+    fn floor_is_the_library_floor_bit_for_bit() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            1e-300,
+            -1e-300,
+            4_503_599_627_370_495.5,
+            -4_503_599_627_370_495.5,
+            4_503_599_627_370_496.0,
+            -4_503_599_627_370_497.0,
+            9.3e18,
+            -9.3e18,
+            1e300,
+            f64::MAX,
+            f64::MIN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MIN_POSITIVE,
+            f64::EPSILON,
+            1.0 - f64::EPSILON / 2.0,
+            -(1.0 - f64::EPSILON / 2.0),
+        ];
+        let mut z = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..100_000 {
+            z = z.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            xs.push(f64::from_bits(z));
+            xs.push((z >> 11) as f64 * 2f64.powi(-40) - 4096.0);
+        }
+        for x in xs.into_iter().filter(|x| !x.is_nan()) {
+            assert_eq!(floor(x).to_bits(), x.floor().to_bits(), "{x:e}");
+        }
+        assert!(floor(f64::NAN).is_nan());
+    }
+
+    /// The parity test gives the spec's k − 2⌊k/2⌋ == 0 on every whole number, ±∞ and NaN.
+    #[test]
+    fn sign_is_the_spec_parity() {
+        let spec = |k: f64| {
+            if k - 2.0 * (k / 2.0).floor() == 0.0 {
+                1.0
+            } else {
+                -1.0
+            }
+        };
+        let mut ks = vec![0.0, -0.0, f64::INFINITY, f64::NEG_INFINITY, f64::NAN];
+        for e in [0, 1, 2, 20, 52, 53, 54, 62, 63, 64, 100, 1023] {
+            let b = 2f64.powi(e);
+            ks.extend([
+                b,
+                -b,
+                b - 1.0,
+                1.0 - b,
+                b + 1.0,
+                -b - 1.0,
+                b + 2.0,
+                -b - 2.0,
+            ]);
+        }
+        ks.extend((-1000..1000).map(f64::from));
+        for k in ks {
+            assert_eq!(sign(k), spec(k), "{k:e}");
+        }
     }
 
     #[test]

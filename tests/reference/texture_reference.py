@@ -261,6 +261,22 @@ def box_avg(x, h):
     return fdiv(tri(b) - tri(a), b - a)
 
 
+def one_cell(P, major, minor, z):
+    """texture.md "One cell": S's sign over the footprint's box when it lies in one cell, else None."""
+    A = 1.0
+    for i in range(3):
+        x = fdiv(P[i], z)
+        h = fdiv(abs(major[i]) + abs(minor[i]), z)
+        if h < 1e-12:
+            k = ffloor(x)
+        else:
+            k = ffloor(x - h)
+            if k != ffloor(x + h):
+                return None
+        A = A * sgn(k)
+    return A
+
+
 # ---------------------------------------------------------------- meshes keep their texture coordinates
 class TexMeshFile(mr.MeshFile):
     def build(self, pos, nrm, tex, corners_faces):
@@ -410,17 +426,27 @@ class TexScene(mr.Scene):
         major = vmul(sub(e, vmul(d, fdiv(dot(e, N), dot(d, N)))), r)
         q = fdiv(length(major), length(minor))
         taps = (16 if q > 15 else int(math.ceil(q))) if q > 0 else 1
-        bax = sdiv(major, float(taps))
-        def E(x):
-            p1 = dot(minor, x); p2 = dot(bax, x)
-            v = math.sqrt(p1 * p1 + p2 * p2) if (p1 * p1 + p2 * p2) >= 0 else math.nan
-            return v if math.isfinite(v) else INF
-        centres = [snap(add(P, vmul(major, fdiv(float(2 * kk + 1) - float(taps), float(taps))))) for kk in range(taps)]
+        def ellipses(taps):
+            bax = sdiv(major, float(taps))
+            def E(x):
+                p1 = dot(minor, x); p2 = dot(bax, x)
+                v = math.sqrt(p1 * p1 + p2 * p2) if (p1 * p1 + p2 * p2) >= 0 else math.nan
+                return v if math.isfinite(v) else INF
+            centres = [snap(add(P, vmul(major, fdiv(float(2 * kk + 1) - float(taps), float(taps))))) for kk in range(taps)]
+            return bax, E, centres
         out = dict(mat)
         for key, mkey in (('diffuse', 'kd'), ('ambient', 'ka')):
             mp = mat['maps'].get(key)
             if mp is None:
                 continue
+            if mp[0] == 'checker':
+                cell = one_cell(P, major, minor, mp[1])
+                if cell is not None:  # texture.md "One cell": the footprint's box in one cell
+                    out[mkey] = mp[2][0] if cell > 0 else mp[2][1]
+                    continue
+            # texture.md "Checker": a footprint whose r is at least half a cell takes one tap
+            n = 1 if mp[0] == 'checker' and r >= 0.5 * mp[1] else taps
+            bax, E, centres = ellipses(n)
             acc = (0.0, 0.0, 0.0)
             for Pk in centres:
                 if mp[0] == 'checker':
@@ -433,7 +459,7 @@ class TexScene(mr.Scene):
                     levels, sc = mp[1], mp[2]
                     val = image_lookup(levels, sc, *self.uvF(kind, ob, extra, P, Pk, E, minor, bax, levels, sc))
                 acc = add(acc, val)
-            out[mkey] = sdiv(acc, float(taps))
+            out[mkey] = sdiv(acc, float(n))
         return out
 
     def uvF(self, kind, ob, extra, P, Pk, E, minor, bax, levels, sc):
