@@ -279,7 +279,7 @@ fn checker(size: f64, colors: &[DVec3; 2], tap: &Tap) -> DVec3 {
 #[inline(always)]
 pub fn floor(x: f64) -> f64 {
     // Beyond 2⁵² every f64 is an integer (and NaN and ±∞ are their own floor).
-    if !(x.abs() < 4_503_599_627_370_496.0) {
+    if x.is_nan() || x.abs() >= 4_503_599_627_370_496.0 {
         return x;
     }
     let t = x as i64 as f64;
