@@ -194,6 +194,7 @@ impl Rig {
         self.tracks.iter().map(|(f, _)| *f)
     }
 
+    /// The value of `field`'s track at t, if the rig keys it.
     fn track(&self, field: Field, t: f64) -> Option<DVec3> {
         let (_, track) = self.tracks.iter().find(|(f, _)| *f == field)?;
         Some(track.at(t).0)
@@ -271,12 +272,7 @@ impl Rig {
 /// A mesh placement from the keyed scale, rotate and translate at t (or the written ones):
 /// translate − offset + (Rz·Ry·Rx of rotate · up)·(scale ∘ p), as the loader builds it.
 fn placement(rig: &Rig, m: &MeshFrame, place: &Placement, t: f64) -> Placement {
-    let get = |f: Field| {
-        rig.tracks
-            .iter()
-            .find(|(g, _)| *g == f)
-            .map(|(_, k)| k.at(t).0)
-    };
+    let get = |f: Field| rig.track(f, t);
     let rotation = match get(Field::Rotate) {
         Some(degrees) => rotation(degrees) * m.up,
         None => place.rotation,
