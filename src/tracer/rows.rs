@@ -287,7 +287,7 @@ fn packet<V: Lanes>(
     for k in (first..end).take_while(|_| !pass.stopped()) {
         let (u, v) = match (&sobol, &seeds, &mut film) {
             (Some(sobol), _, Some(x)) => {
-                sobol.at(k, x);
+                sobol.at(k, V::N, x);
                 (V::load(&x[0]), V::load(&x[1]))
             }
             (None, Some(seeds), _) => offsets::<V>(pattern, seeds, k),

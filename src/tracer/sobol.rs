@@ -146,12 +146,13 @@ impl<const N: usize> Packet<N> {
     /// dimensions 0 and 1, the only pair that is a (0, 2)-sequence; the lens (a, b) on 2
     /// and 3, the best of the other pairs (t ≤ 2 for the first 1024 points, 1 mostly); time
     /// τ on 4, whose projection alone is as even as any.
+    /// Only lanes 0..n are written: the packet's lanes, so no work goes to the others.
     #[inline(always)]
-    pub fn at(&self, k: u32, out: &mut [[f64; N]; 5]) {
+    pub fn at(&self, k: u32, n: usize, out: &mut [[f64; N]; 5]) {
         // Reversed, the direction numbers' XOR is already what Laine-Karras permutes.
         let x = point(k).map(u32::reverse_bits);
         for ((out, seeds), x) in out.iter_mut().zip(&self.seeds).zip(x) {
-            for (o, &seed) in out.iter_mut().zip(seeds) {
+            for (o, &seed) in out.iter_mut().zip(seeds).take(n) {
                 let y = laine_karras(x, seed).reverse_bits();
                 *o = f64::from(y) * (1.0 / 4_294_967_296.0);
             }
@@ -191,7 +192,7 @@ mod tests {
             let p = Packet::<4>::new(1, |_| state);
             let at = |k: u32| {
                 let mut out = [[0.0; 4]; 5];
-                p.at(k, &mut out);
+                p.at(k, 4, &mut out);
                 let seeds = seeds(state);
                 let want = point(k);
                 for d in 0..5 {
@@ -307,7 +308,7 @@ mod tests {
         for (frame, pixel, k, want) in cases {
             let z = super::super::sample::state(frame, pixel);
             let mut out = [[0.0f64; 1]; 5];
-            Packet::<1>::new(1, |_| z).at(k, &mut out);
+            Packet::<1>::new(1, |_| z).at(k, 1, &mut out);
             assert_eq!(
                 out.map(|d| d[0].to_bits()),
                 want,
