@@ -355,34 +355,52 @@ fn share_off_by_more_than_two_levels() {
 
 /// With area lights, `measure` adds the light-sample trade (1, 4, 16 and 64 points per eye
 /// sample at the file's pixel sampling) next to the pixel-sample ladder; more light samples
-/// come closer to the reference.
+/// come closer to the reference. Lights with keys take the rows' counts too (they are posed
+/// from their own copy, which the rows once left at the file's count: four equal rows).
 #[test]
 fn measure_shows_light_samples_beside_pixel_samples() {
     let tmp = scratch("measure_lights");
-    let out = run_in(
-        &tmp,
-        &[
-            "measure",
-            repo().join("sequences/soft-shadows.yaml").to_str().unwrap(),
-            "--size",
-            "48x27",
-            "--runs",
-            "1",
-            "--out",
-            "m",
-        ],
-    );
-    assert!(out.status.success(), "{}", stderr(&out));
-    let csv = std::fs::read_to_string(tmp.join("m/measure.csv")).unwrap();
-    let rmse: Vec<f64> = csv
-        .lines()
-        .filter(|l| l.starts_with("lights,"))
-        .map(|l| l.split(',').nth(8).unwrap().parse().unwrap())
-        .collect();
-    assert_eq!(rmse.len(), 4, "{csv}");
-    assert!(rmse[3] < rmse[0], "{csv}");
-    let svg = std::fs::read_to_string(tmp.join("m/measure.svg")).unwrap();
-    assert!(svg.contains("#ff7f0e"), "the lights line");
+    let still = std::fs::read_to_string(repo().join("sequences/soft-shadows.yaml")).unwrap();
+    let keyed = still
+        .replace(
+            "ambient: [1, 1, 1], diffuse: [0.85, 0.82, 0.75], specular: [1, 1, 1], samples: 16 }",
+            "ambient: [1, 1, 1], diffuse: [0.85, 0.82, 0.75], specular: [1, 1, 1], samples: 16 }\n    \
+             keys: [ { time: 0, center: [-0.2, 3.2, 0.6] }, { time: 9, center: [0.2, 3.2, 0.6] } ]",
+        )
+        .replace(
+            "specular: [0.5, 0.5, 0.5], samples: 16 }",
+            "specular: [0.5, 0.5, 0.5], samples: 16 }\n    \
+             keys: [ { time: 0, corner: [3, 0.3, -1] }, { time: 9, corner: [3, 0.5, -1] } ]",
+        );
+    assert_eq!(keyed.matches("keys:").count(), 2, "both area lights keyed");
+    for (name, yaml) in [("still", &still), ("keyed", &keyed)] {
+        let file = tmp.join(format!("{name}.yaml"));
+        std::fs::write(&file, yaml).unwrap();
+        let out = run_in(
+            &tmp,
+            &[
+                "measure",
+                file.to_str().unwrap(),
+                "--size",
+                "48x27",
+                "--runs",
+                "1",
+                "--out",
+                name,
+            ],
+        );
+        assert!(out.status.success(), "{}", stderr(&out));
+        let csv = std::fs::read_to_string(tmp.join(name).join("measure.csv")).unwrap();
+        let rmse: Vec<f64> = csv
+            .lines()
+            .filter(|l| l.starts_with("lights,"))
+            .map(|l| l.split(',').nth(8).unwrap().parse().unwrap())
+            .collect();
+        assert_eq!(rmse.len(), 4, "{name}: {csv}");
+        assert!(rmse[3] < rmse[0], "{name}: {csv}");
+        let svg = std::fs::read_to_string(tmp.join(name).join("measure.svg")).unwrap();
+        assert!(svg.contains("#ff7f0e"), "the lights line");
+    }
 }
 
 /// `render --dry-run`'s effective settings line for `yaml` with `args`.

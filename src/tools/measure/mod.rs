@@ -9,6 +9,7 @@ use crate::frame::Frame;
 use crate::scene::Light;
 use crate::schedule::{RunError, render_with};
 use crate::sequence::{Film, Quality, Sequence, default_sampling};
+use crate::timeline::motion::Posed;
 use crate::tracer::{Adaptive, Precision, Sampler, Settings, World};
 use crate::transfer::Encoding;
 use std::time::Instant;
@@ -351,9 +352,18 @@ fn light_rows(
     }
     for m in [1, 4, 16, 64] {
         let mut seq = seq.clone();
-        for l in &mut seq.scene.lights {
+        let set = |l: &mut Light| {
             if let Light::Sphere { samples, .. } | Light::Rect { samples, .. } = l {
                 *samples = m;
+            }
+        };
+        for l in &mut seq.scene.lights {
+            set(l);
+        }
+        // A light with keys is posed from its rig's copy, not from the still scene.
+        for rig in &mut seq.timeline.motion {
+            if let Posed::Light(l) = &mut rig.base {
+                set(l);
             }
         }
         let world = World::new(seq.scene.clone());
