@@ -202,20 +202,28 @@ pub struct Mesh {
     /// Bytes and seconds the read took, for `check`.
     pub bytes: u64,
     pub load_seconds: f64,
+    /// `box_of(positions, triangles)`, made once with them: every frame asks for it (the f32
+    /// precision check), and a walk over millions of triangles a frame is not free.
+    pub local_box: (DVec3, DVec3),
 }
 
 impl Mesh {
-    /// The smallest and largest local coordinates of the vertices its triangles use (a
-    /// vertex only a dropped triangle used, finite or not, does not count).
+    /// The smallest and largest local coordinates of the vertices its triangles use.
     pub fn bounds(&self) -> (DVec3, DVec3) {
-        self.triangles.iter().flatten().fold(
-            (DVec3::INFINITY, DVec3::NEG_INFINITY),
-            |(lo, hi), &i| {
-                let p = self.positions[i as usize];
-                (lo.min(p), hi.max(p))
-            },
-        )
+        self.local_box
     }
+}
+
+/// The smallest and largest of the `positions` the `triangles` use (a vertex only a dropped
+/// triangle used, finite or not, does not count).
+pub fn box_of(positions: &[DVec3], triangles: &[[u32; 3]]) -> (DVec3, DVec3) {
+    triangles
+        .iter()
+        .flatten()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &i| {
+            let p = positions[i as usize];
+            (lo.min(p), hi.max(p))
+        })
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -105,6 +105,21 @@ impl<R: BufRead> Input<R> {
         Ok(Some(out))
     }
 
+    /// The bytes read ahead and not yet taken (empty at the end of the file): a binary reader
+    /// decodes whole rows where they lie, then takes them with `consume`.
+    pub(crate) fn buffered(&mut self) -> Result<&[u8], Fail> {
+        self.inner.fill_buf().map_err(read_error)
+    }
+
+    /// Takes the first `n` bytes of `buffered` (which must hold them).
+    pub(crate) fn consume(&mut self, n: usize) -> Result<(), Fail> {
+        let chunk = self.inner.fill_buf().map_err(read_error)?;
+        self.hash = fnv1a_on(self.hash, &chunk[..n]);
+        self.taken += n as u64;
+        self.inner.consume(n);
+        Ok(())
+    }
+
     /// The first bytes still to be read (as many as the buffer holds, at most `n`).
     pub(crate) fn peek(&mut self, n: usize) -> Result<Vec<u8>, Fail> {
         let chunk = self.inner.fill_buf().map_err(read_error)?;

@@ -230,7 +230,9 @@ fn finish(file: &Path, soup: Soup) -> Result<Loaded, Fail> {
     }
     kept.shrink_to_fit();
     let (normals, file_normals) = vertex_normals(&positions, &kept, normals, has_normal);
+    let local_box = crate::scene::box_of(&positions, &kept);
     let mesh = Mesh {
+        local_box,
         file: file.to_owned(),
         positions,
         normals,

@@ -419,6 +419,113 @@ mod tests {
         );
     }
 
+    /// One mesh in PLY of every body format: vertices `double x, float y, short z, float nx
+    /// ny nz, uchar u, float v`; faces of 2 to 5 corners, with a flag before the list or not.
+    fn every_format(flagged: bool) -> [Vec<u8>; 3] {
+        let n = 97u32;
+        let vertex = |i: u32| {
+            let f = f64::from(i);
+            [
+                f * 0.125 - 3.0,
+                f * 0.5,
+                f - 40.0,
+                0.0,
+                0.75,
+                -0.5,
+                f64::from(i % 7),
+                0.25,
+            ]
+        };
+        let corners =
+            |k: u32| -> Vec<u32> { (0..2 + k % 4).map(|j| (k * 31 + j * 17) % n).collect() };
+        let faces = 211u32;
+        let mut out = Vec::new();
+        for format in ["ascii", "binary_little_endian", "binary_big_endian"] {
+            let flag = if flagged { "property uchar flag\n" } else { "" };
+            let mut b = format!(
+                "ply\nformat {format} 1.0\nelement vertex {n}\nproperty double x\nproperty float y\nproperty short z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty uchar u\nproperty float v\nelement face {faces}\n{flag}property list uchar uint vertex_indices\nend_header\n"
+            )
+            .into_bytes();
+            let big = format == "binary_big_endian";
+            let put = |b: &mut Vec<u8>, le: &[u8], be: &[u8]| b.extend(if big { be } else { le });
+            for i in 0..n {
+                let v = vertex(i);
+                if format == "ascii" {
+                    let words: Vec<String> = v.iter().map(|x| x.to_string()).collect();
+                    b.extend(format!("{}\n", words.join(" ")).bytes());
+                    continue;
+                }
+                put(&mut b, &v[0].to_le_bytes(), &v[0].to_be_bytes());
+                put(
+                    &mut b,
+                    &(v[1] as f32).to_le_bytes(),
+                    &(v[1] as f32).to_be_bytes(),
+                );
+                put(
+                    &mut b,
+                    &(v[2] as i16).to_le_bytes(),
+                    &(v[2] as i16).to_be_bytes(),
+                );
+                for x in &v[3..6] {
+                    put(
+                        &mut b,
+                        &(*x as f32).to_le_bytes(),
+                        &(*x as f32).to_be_bytes(),
+                    );
+                }
+                b.push(v[6] as u8);
+                put(
+                    &mut b,
+                    &(v[7] as f32).to_le_bytes(),
+                    &(v[7] as f32).to_be_bytes(),
+                );
+            }
+            for k in 0..faces {
+                let c = corners(k);
+                if format == "ascii" {
+                    let words: Vec<String> = c.iter().map(|x| x.to_string()).collect();
+                    let flag = if flagged { "1 " } else { "" };
+                    b.extend(format!("{flag}{} {}\n", c.len(), words.join(" ")).bytes());
+                    continue;
+                }
+                if flagged {
+                    b.push(1);
+                }
+                b.push(c.len() as u8);
+                for i in c {
+                    put(&mut b, &i.to_le_bytes(), &i.to_be_bytes());
+                }
+            }
+            out.push(b);
+        }
+        out.try_into().unwrap()
+    }
+
+    /// Binary rows decoded where they lie in the read buffer, and rows across its end read
+    /// value by value, give what the ASCII body gives; the digest covers every byte once.
+    #[test]
+    fn binary_rows_read_alike_wherever_the_buffer_ends() {
+        for flagged in [false, true] {
+            let [ascii, little, big] = every_format(flagged);
+            let want = read_bytes(&ascii).unwrap();
+            assert_eq!(want.triangles.len(), 52 * 6 + 3, "2 to 5 corners fanned");
+            for bytes in [little, big] {
+                for cap in [3, 7, 13, 64, 1000, 1 << 16] {
+                    let stream = std::io::BufReader::with_capacity(cap, &bytes[..]);
+                    let mut input = Input::new(stream, bytes.len() as u64);
+                    let got = read(&mut input).unwrap_or_else(|e| panic!("{}", e.message));
+                    assert_eq!(got.positions, want.positions, "buffer of {cap}");
+                    assert_eq!(got.normals, want.normals);
+                    assert_eq!(got.uvs, want.uvs);
+                    assert_eq!(got.triangles, want.triangles, "buffer of {cap}");
+                    assert_eq!(got.notes, want.notes);
+                    let digest = super::super::fnv1a(&bytes);
+                    assert_eq!(input.finish().unwrap(), (digest, bytes.len() as u64));
+                }
+            }
+        }
+    }
+
     #[test]
     fn two_vertex_elements_are_refused() {
         let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n0 0 0 0 0 1\n";

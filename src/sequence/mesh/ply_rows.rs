@@ -78,39 +78,58 @@ impl<R: BufRead> Body<'_, R> {
     /// A list's length: a whole number, at least 0.
     fn count(&mut self, ty: Scalar, what: &str, i: u64) -> Result<u64, Fail> {
         let v = self.value(ty, what, i)?;
-        if !(v >= 0.0 && v.fract() == 0.0 && v < 1e18) {
-            return Err(Fail::at(
-                format!("{what} {i}"),
-                format!("a list's length must be a whole number, 0 or more (got {v})"),
-            ));
-        }
-        Ok(v as u64)
+        list_len(v, what, i)
     }
 
     fn binary(&mut self, ty: Scalar) -> Result<Option<f64>, Fail> {
         let big = self.format == Format::Big;
         macro_rules! take {
-            ($t:ty, $n:literal) => {
-                match self.input.bytes::<$n>()? {
-                    None => None,
-                    Some(b) => Some(f64::from(match big {
-                        true => <$t>::from_be_bytes(b),
-                        false => <$t>::from_le_bytes(b),
-                    })),
-                }
+            ($n:literal) => {
+                self.input.bytes::<$n>()?.map(|b| decode(ty, big, &b))
             };
         }
-        Ok(match ty {
-            Scalar::I8 => take!(i8, 1),
-            Scalar::U8 => take!(u8, 1),
-            Scalar::I16 => take!(i16, 2),
-            Scalar::U16 => take!(u16, 2),
-            Scalar::I32 => take!(i32, 4),
-            Scalar::U32 => take!(u32, 4),
-            Scalar::F32 => take!(f32, 4),
-            Scalar::F64 => take!(f64, 8),
+        Ok(match ty.size() {
+            1 => take!(1),
+            2 => take!(2),
+            4 => take!(4),
+            _ => take!(8),
         })
     }
+}
+
+/// The value of type `ty` at the start of `b` (which holds at least its size).
+#[inline]
+fn decode(ty: Scalar, big: bool, b: &[u8]) -> f64 {
+    macro_rules! get {
+        ($t:ty, $n:literal) => {{
+            let a: [u8; $n] = b[..$n].try_into().expect("the caller holds the bytes");
+            f64::from(match big {
+                true => <$t>::from_be_bytes(a),
+                false => <$t>::from_le_bytes(a),
+            })
+        }};
+    }
+    match ty {
+        Scalar::I8 => get!(i8, 1),
+        Scalar::U8 => get!(u8, 1),
+        Scalar::I16 => get!(i16, 2),
+        Scalar::U16 => get!(u16, 2),
+        Scalar::I32 => get!(i32, 4),
+        Scalar::U32 => get!(u32, 4),
+        Scalar::F32 => get!(f32, 4),
+        Scalar::F64 => get!(f64, 8),
+    }
+}
+
+/// A list's length: a whole number, at least 0.
+fn list_len(v: f64, what: &str, i: u64) -> Result<u64, Fail> {
+    if !(v >= 0.0 && v.fract() == 0.0 && v < 1e18) {
+        return Err(Fail::at(
+            format!("{what} {i}"),
+            format!("a list's length must be a whole number, 0 or more (got {v})"),
+        ));
+    }
+    Ok(v as u64)
 }
 
 fn early(what: &str, i: u64) -> Fail {
@@ -155,8 +174,41 @@ pub(super) fn vertices<R: BufRead>(
     if uv.is_some() {
         budget::grow(&mut uvs, n, what)?;
     }
+    let mut keep = |values: &[f64], i: u64| -> Result<(), Fail> {
+        let used = normal.iter().flatten().chain(uv.iter().flatten());
+        finite(e, values, used, i)?;
+        soup.positions
+            .push(DVec3::new(values[x], values[y], values[z]));
+        if let Some([a, b, c]) = normal {
+            normals.push(DVec3::new(values[a], values[b], values[c]));
+        }
+        if let Some([a, b]) = uv {
+            uvs.push(DVec2::new(values[a], values[b]));
+        }
+        Ok(())
+    };
+    let layout = fixed_layout(e, body.format);
+    let big = body.format == Format::Big;
     let mut values = vec![0.0; e.props.len()];
-    for i in 0..e.count {
+    let mut i = 0;
+    while i < e.count {
+        // Whole binary rows of one layout, decoded where they lie in the read buffer.
+        if let Some((stride, fields)) = &layout {
+            let buf = body.input.buffered()?;
+            let whole = (buf.len() / stride).min((e.count - i).try_into().unwrap_or(usize::MAX));
+            for row in buf.chunks_exact(*stride).take(whole) {
+                for (v, &(at, ty)) in values.iter_mut().zip(fields) {
+                    *v = decode(ty, big, &row[at..]);
+                }
+                keep(&values, i)?;
+                i += 1;
+            }
+            if whole > 0 {
+                body.input.consume(whole * stride)?;
+                continue;
+            }
+        }
+        // A row across the buffer's end, or any ASCII row or row with a list: value by value.
         body.row("vertex", i)?;
         for (k, p) in e.props.iter().enumerate() {
             values[k] = match p.list {
@@ -170,24 +222,28 @@ pub(super) fn vertices<R: BufRead>(
             };
         }
         body.end_row("vertex", i)?;
-        finite(
-            e,
-            &values,
-            normal.iter().flatten().chain(uv.iter().flatten()),
-            i,
-        )?;
-        soup.positions
-            .push(DVec3::new(values[x], values[y], values[z]));
-        if let Some([a, b, c]) = normal {
-            normals.push(DVec3::new(values[a], values[b], values[c]));
-        }
-        if let Some([a, b]) = uv {
-            uvs.push(DVec2::new(values[a], values[b]));
-        }
+        keep(&values, i)?;
+        i += 1;
     }
     soup.normals = normal.map(|_| normals);
     soup.uvs = uv.map(|_| uvs);
     Ok(())
+}
+
+/// A binary element's row size and each property's offset and type, when no property is a
+/// list (every row then has the same layout).
+fn fixed_layout(e: &Element, format: Format) -> Option<(usize, Vec<(usize, Scalar)>)> {
+    if format == Format::Ascii || e.props.iter().any(|p| p.list.is_some()) {
+        return None;
+    }
+    let mut at = 0;
+    let fields = e.props.iter().map(|p| {
+        let field = (at, p.ty);
+        at += p.ty.size() as usize;
+        field
+    });
+    let fields = fields.collect();
+    Some((at, fields))
 }
 
 /// A vertex's normal and texture coordinates (the properties at `used`) must be finite: a NaN
@@ -238,7 +294,17 @@ impl Faces {
         // Vertices read already (an element before this one), or none yet.
         let known = (soup.positions.len() as f64, !soup.positions.is_empty());
         let mut polygon = Vec::new();
-        for i in 0..e.count {
+        // A binary element whose only property is the index list is decoded in place.
+        let alone = body.format != Format::Ascii && e.props.len() == 1;
+        let mut i = 0;
+        while i < e.count {
+            if alone {
+                let took = self.in_place(e, body, soup, (i, known), &mut polygon)?;
+                i += took;
+                if took > 0 {
+                    continue;
+                }
+            }
             body.row("face", i)?;
             for (k, p) in e.props.iter().enumerate() {
                 let Some(c) = p.list else {
@@ -256,23 +322,65 @@ impl Faces {
                     budget::grow(&mut polygon, 1, || format!("face {i}"))?;
                     polygon.push(v as u32);
                 }
-                if k != list {
-                    continue;
+                if k == list {
+                    self.keep(&polygon, i, soup)?;
                 }
-                if polygon.len() < 3 {
-                    if self.short.0 == 0 {
-                        self.short.1 = i;
-                    }
-                    self.short.0 += 1;
-                    continue;
-                }
-                budget::grow(&mut soup.triangles, polygon.len() - 2, || {
-                    "the mesh's triangles".into()
-                })?;
-                fan(&polygon, &mut soup.triangles);
             }
             body.end_row("face", i)?;
+            i += 1;
         }
+        Ok(())
+    }
+
+    /// The faces from `first` on whose rows lie whole in the read buffer, decoded there (the
+    /// element's only property is the index list); how many.
+    fn in_place<R: BufRead>(
+        &mut self,
+        e: &Element,
+        body: &mut Body<R>,
+        soup: &mut Soup,
+        (first, known): (u64, (f64, bool)),
+        polygon: &mut Vec<u32>,
+    ) -> Result<u64, Fail> {
+        let (c, ty) = (e.props[0].list.expect("the index list"), e.props[0].ty);
+        let (cs, ts) = (c.size() as usize, ty.size() as usize);
+        let big = body.format == Format::Big;
+        let buf = body.input.buffered()?;
+        let (mut at, mut i) = (0, first);
+        while i < e.count && at + cs <= buf.len() {
+            let len = list_len(decode(c, big, &buf[at..]), "face", i)?;
+            let end = usize::try_from(len)
+                .ok()
+                .and_then(|n| n.checked_mul(ts))
+                .and_then(|b| b.checked_add(at + cs))
+                .filter(|&end| end <= buf.len());
+            let Some(end) = end else { break };
+            polygon.clear();
+            for v in buf[at + cs..end].chunks_exact(ts) {
+                let v = decode(ty, big, v);
+                self.index(v, i, known)?;
+                polygon.push(v as u32);
+            }
+            self.keep(polygon, i, soup)?;
+            (at, i) = (end, i + 1);
+        }
+        body.input.consume(at)?;
+        Ok(i - first)
+    }
+
+    /// Face `i`'s corners fanned into triangles, or counted as skipped under 3.
+    fn keep(&mut self, polygon: &[u32], i: u64, soup: &mut Soup) -> Result<(), Fail> {
+        if polygon.len() < 3 {
+            if self.short.0 == 0 {
+                self.short.1 = i;
+            }
+            self.short.0 += 1;
+            return Ok(());
+        }
+        budget::grow(&mut soup.triangles, polygon.len() - 2, || {
+            "the mesh's triangles".into()
+        })?;
+        fan(polygon, &mut soup.triangles);
         Ok(())
     }
 
