@@ -117,7 +117,7 @@ pub(crate) fn walk<V: Lanes, S: Visit<V>, R: Real>(
             continue;
         }
         let node = &nodes[at as usize];
-        let (first, count) = (node.first[c as usize], node.count[c as usize]);
+        let (first, count) = (node.first[c as usize], u32::from(node.count[c as usize]));
         if count == 0 {
             push_children(&ray, nodes, first, limit, &mut stack);
             continue;

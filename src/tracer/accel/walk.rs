@@ -214,7 +214,7 @@ fn by_lanes<V: Lanes, S: Visit<V>, R: Real>(
         entries: &mut entries,
         top: 0,
     };
-    for c in (0..nodes[0].kids).rev() {
+    for c in (0..u32::from(nodes[0].kids)).rev() {
         stack.push((0, c, lanes.bits()));
     }
     while let Some((at, slot, mask)) = stack.pop() {
