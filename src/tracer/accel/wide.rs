@@ -376,7 +376,8 @@ fn split(prims: &mut [Prim], run: &Run, (depth, shape): (usize, Shape)) -> Optio
     }
     let (cmin, cmax) = centre_bounds(prims);
     let span = cmax - cmin;
-    let bins = binned(prims, cmin, span);
+    let mut bins = [[EMPTY_BIN; BINS]; 3];
+    binned(prims, cmin, span, &mut bins);
     let mut best: Option<(f32, usize, usize)> = None;
     for axis in 0..3 {
         if span[axis].is_nan() || span[axis] <= 0.0 {
@@ -538,11 +539,12 @@ fn for_chunks<T: Merge>(prims: &[Prim], acc: &mut T, add: impl Fn(&mut T, &Prim)
     }
 }
 
-/// The bins of every axis in one pass over the primitives.
-fn binned(prims: &[Prim], start: Vec3, span: Vec3) -> [Bins; 3] {
-    let mut bins = [[EMPTY_BIN; BINS]; 3];
+/// The bins of every axis (empty ones given) filled in one pass over the primitives. (Filled
+/// in place: returned, 2 KiB of bins were copied for every node, which near the leaves cost
+/// more than binning its few primitives.)
+fn binned(prims: &[Prim], start: Vec3, span: Vec3, bins: &mut [Bins; 3]) {
     let scale = Vec3::splat(BINS as f32) / span;
-    for_chunks(prims, &mut bins, |bins, p| {
+    for_chunks(prims, bins, |bins, p| {
         let (lo, hi) = (Vec3A::from(p.lo), Vec3A::from(p.hi));
         for axis in 0..3 {
             if span[axis] > 0.0 {
@@ -553,7 +555,6 @@ fn binned(prims: &[Prim], start: Vec3, span: Vec3) -> [Bins; 3] {
             }
         }
     });
-    bins
 }
 
 /// The cheapest split after one of the first 15 of an axis's bins, and its cost: the
@@ -723,7 +724,8 @@ mod tests {
             for n in [1, 2, 3, 5, 9, chunk.len()] {
                 let part = &chunk[..n.min(chunk.len())];
                 let (lo, hi) = centre_bounds(part);
-                let bins = binned(part, lo, hi - lo);
+                let mut bins = [[EMPTY_BIN; BINS]; 3];
+                binned(part, lo, hi - lo, &mut bins);
                 for axis in &bins {
                     let (a, b) = (sah(axis), sah_every_bin(axis));
                     assert_eq!(
