@@ -242,7 +242,7 @@ enum Child {
 
 /// What opening a node costs, against testing one primitive (the surface area heuristic's
 /// traversal cost).
-const TRAVERSAL: f32 = 1.0;
+const TRAVERSAL: f32 = 2.0;
 
 /// A run of primitives a node's child covers: where it starts in its node's slice, how
 /// many, the union of their boxes, and whether it may still split.
