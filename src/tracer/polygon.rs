@@ -12,7 +12,7 @@ use super::accel::{Nearest, Rays};
 use super::mesh::NO_TRIANGLE;
 use super::shade::Lift;
 use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
-use crate::scene::{MeshShading, Placement, Shape};
+use crate::scene::{Mesh, MeshShading, Placement, Shape};
 use glam::DVec3;
 
 /// What shading needs about the lanes that hit a triangle. The stations of `gouraud` and
@@ -51,6 +51,69 @@ pub(super) fn roundoff<V: Lanes>() -> f64 {
     }
 }
 
+/// What `gather` finds: each mesh lane's (object, triangle, u, v); its geometric normal,
+/// shading normal and lift (x, y, z, x, y, z, δ, one array each); the lanes lit at their
+/// vertices (`gouraud`) and at their centroid (`constant`).
+struct Gathered {
+    at: [(usize, u32, f64, f64); MAX_LANES],
+    out: [[f64; MAX_LANES]; 7],
+    gouraud: u32,
+    constant: u32,
+}
+
+/// `MeshLanes::of`'s per-lane work on the lanes in `bits`, from each lane's object, t, u, v
+/// and hit point x, y, z (`lanes`, one array each) and triangle. Scalar f64 code, compiled
+/// once for every kernel and kept out of the shading of scenes without meshes.
+#[inline(never)]
+fn gather(
+    world: &World,
+    bits: u32,
+    lanes: &[[f64; MAX_LANES]; 7],
+    prim: &[u32; MAX_LANES],
+    roundoff: f64,
+) -> Gathered {
+    let [objects, t, u, v, px, py, pz] = lanes;
+    let mut at = [(0usize, NO_TRIANGLE, 0.0, 0.0); MAX_LANES];
+    // Every lane's triangle (its vertex indices) first, then the lanes' vertices: no lane's
+    // vertex fetches then wait on its own triangle's, and the fetches of different lanes
+    // overlap (a fine mesh's hits often miss the cache).
+    let mut corners = [[0u32; 3]; MAX_LANES];
+    let mut rest = bits;
+    while rest != 0 {
+        let k = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        at[k] = (objects[k] as usize, prim[k], u[k], v[k]);
+        corners[k] = indices(world, at[k]);
+    }
+    let mut out = [[0.0f64; MAX_LANES]; 7];
+    let (mut gouraud, mut constant) = (0u32, 0u32);
+    let mut rest = bits;
+    while rest != 0 {
+        let k = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        let p = DVec3::new(px[k], py[k], pz[k]);
+        let (geom, shade, shading) = normals(world, at[k], corners[k]);
+        let delta = lift_distance(p, t[k], roundoff);
+        for (i, x) in [geom.x, geom.y, geom.z, shade.x, shade.y, shade.z, delta]
+            .into_iter()
+            .enumerate()
+        {
+            out[i][k] = x;
+        }
+        match shading {
+            MeshShading::Gouraud => gouraud |= 1 << k,
+            MeshShading::Constant => constant |= 1 << k,
+            _ => {}
+        }
+    }
+    Gathered {
+        at,
+        out,
+        gouraud,
+        constant,
+    }
+}
+
 impl<'w, V: Lanes> MeshLanes<'w, V> {
     /// The mesh lanes of `hit` (None when no lane hit a triangle).
     #[inline(always)]
@@ -65,38 +128,21 @@ impl<'w, V: Lanes> MeshLanes<'w, V> {
         if bits == 0 {
             return None;
         }
-        let (objects, t, u, v) = (
+        let lanes = [
             hit.object.array(),
             hit.t.array(),
             hit.u.array(),
             hit.v.array(),
-        );
-        let (px, py, pz) = (point.x.array(), point.y.array(), point.z.array());
-        let mut at = [(0usize, NO_TRIANGLE, 0.0, 0.0); MAX_LANES];
-        // geom x, y, z, shade x, y, z, delta: one array per value, loaded into lanes once.
-        let mut out = [[0.0f64; MAX_LANES]; 7];
-        let (mut gouraud, mut constant) = (0u32, 0u32);
-        let u_lanes = roundoff::<V>();
-        let mut rest = bits;
-        while rest != 0 {
-            let k = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            at[k] = (objects[k] as usize, hit.prim[k], u[k], v[k]);
-            let p = DVec3::new(px[k], py[k], pz[k]);
-            let (geom, shade, shading) = normals(world, at[k]);
-            let delta = lift_distance(p, t[k], u_lanes);
-            for (i, x) in [geom.x, geom.y, geom.z, shade.x, shade.y, shade.z, delta]
-                .into_iter()
-                .enumerate()
-            {
-                out[i][k] = x;
-            }
-            match shading {
-                MeshShading::Gouraud => gouraud |= 1 << k,
-                MeshShading::Constant => constant |= 1 << k,
-                _ => {}
-            }
-        }
+            point.x.array(),
+            point.y.array(),
+            point.z.array(),
+        ];
+        let Gathered {
+            at,
+            out,
+            gouraud,
+            constant,
+        } = gather(world, bits, &lanes, &hit.prim, roundoff::<V>());
         // Loads written out: a closure is compiled outside the kernel's target feature.
         Some(MeshLanes {
             world,
@@ -240,12 +286,9 @@ pub(super) struct Station<V: Lanes> {
     pub lift: Lift<V>,
 }
 
-/// The placement, file positions and normals of triangle `prim` of mesh object `object`.
-fn triangle(
-    world: &World,
-    object: usize,
-    prim: u32,
-) -> (Placement, [DVec3; 3], [DVec3; 3], MeshShading) {
+/// The placement and shading model of mesh object `object`, and its mesh.
+#[inline(always)]
+fn placed(world: &World, object: usize) -> (Placement, &Mesh, MeshShading) {
     let scene = &world.scene;
     let Shape::Mesh {
         mesh,
@@ -255,25 +298,37 @@ fn triangle(
     else {
         unreachable!("a triangle hit on an object that is not a mesh");
     };
-    let m = &scene.meshes[mesh];
-    let tri = m.triangles[prim as usize];
-    (
-        place,
-        tri.map(|i| m.positions[i as usize]),
-        tri.map(|i| m.normals[i as usize]),
-        shading,
-    )
+    (place, &scene.meshes[mesh], shading)
 }
 
-/// The geometric and shading normals of one lane that hit triangle `prim` of `object` at
-/// barycentrics (u, v), and the object's shading model. Scalar f64 code, compiled once for
-/// every kernel.
-#[inline(never)]
+/// The vertex indices of one lane's hit triangle.
+#[inline(always)]
+fn indices(world: &World, (object, prim, _, _): (usize, u32, f64, f64)) -> [u32; 3] {
+    placed(world, object).1.triangles[prim as usize]
+}
+
+/// The file positions (0–2) and vertex normals (3–5) of the corners `tri` of a triangle of
+/// mesh object `object`.
+#[inline(always)]
+fn vertices(world: &World, object: usize, tri: [u32; 3]) -> [DVec3; 6] {
+    let m = placed(world, object).1;
+    let (p, n) = (&m.positions, &m.normals);
+    let (a, b, c) = (tri[0] as usize, tri[1] as usize, tri[2] as usize);
+    [p[a], p[b], p[c], n[a], n[b], n[c]]
+}
+
+/// The geometric and shading normals of one lane that hit the triangle of `object` with vertex
+/// indices `tri` at barycentrics (u, v), and the object's shading model. Scalar f64 code,
+/// compiled once for every kernel (in `gather`).
+#[inline(always)]
 fn normals(
     world: &World,
-    (object, prim, u, v): (usize, u32, f64, f64),
+    (object, _, u, v): (usize, u32, f64, f64),
+    tri: [u32; 3],
 ) -> (DVec3, DVec3, MeshShading) {
-    let (place, q, n, shading) = triangle(world, object, prim);
+    let (place, _, shading) = placed(world, object);
+    let data = vertices(world, object, tri);
+    let (q, n) = (&data[..3], &data[3..]);
     let b = [1.0 - u - v, u, v];
     let wound = place.normal((q[1] - q[0]).cross(q[2] - q[0]));
     let smooth = smooth_or(&place, n[0] * b[0] + n[1] * b[1] + n[2] * b[2], wound);
@@ -305,16 +360,12 @@ fn smooth_or(place: &Placement, sum: DVec3, wound: DVec3) -> DVec3 {
 
 /// Corner `i` of one lane's triangle placed, or (`normal`) its vertex normal placed.
 #[inline(never)]
-fn corner(
-    world: &World,
-    (object, prim, _, _): (usize, u32, f64, f64),
-    i: usize,
-    normal: bool,
-) -> DVec3 {
-    let (place, q, n, _) = triangle(world, object, prim);
+fn corner(world: &World, at: (usize, u32, f64, f64), i: usize, normal: bool) -> DVec3 {
+    let place = placed(world, at.0).0;
+    let data = vertices(world, at.0, indices(world, at));
     match normal {
-        false => place.point(q[i]),
-        true => place.normal(n[i]),
+        false => place.point(data[i]),
+        true => place.normal(data[3 + i]),
     }
 }
 

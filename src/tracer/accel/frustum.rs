@@ -12,9 +12,13 @@
 //! rounded values are smallest (and largest) at a corner. The corners' least entry and
 //! greatest exit, computed with the same operations in the same precision, therefore bound
 //! every lane's, and max and min keep the order: the packet's test passes whenever a lane's
-//! does (with the same f32 slack as the lanes' test).
+//! does (with the same f32 slack as the lanes' test). Two consequences the walk uses: the
+//! bounds of fewer lanes still bound each of them (a walk narrows its bounds as its shadow rays
+//! stop), and a child tested before a limit shrank can be tested again with the smaller one
+//! from its least entry alone (`before`), since every lane's exit is at most its limit.
 
 use super::Slabs;
+use super::walk::fold;
 use super::wide::{Node, WIDTH};
 use crate::lanes::{Lanes, MAX_LANES, Mask};
 use std::ops::{Mul, Sub};
@@ -81,6 +85,7 @@ impl Real for f64 {
 
 /// A packet's bounds per axis: its origins' and reciprocal directions' least and greatest
 /// values, and whether it runs backwards (every direction negative) along the axis.
+#[derive(Clone, Copy)]
 pub(crate) struct Frustum<R: Real> {
     origin: [(R, R); 3],
     inv: [(R, R); 3],
@@ -158,6 +163,13 @@ impl<R: Real> Frustum<R> {
         }
         (hit, near)
     }
+
+    /// Whether a child whose least entry is `near` may still be entered at or before
+    /// `limit`: `children`'s test of the child again, after the limit shrank.
+    #[inline(always)]
+    pub(crate) fn before(&self, near: R, limit: R) -> bool {
+        near * self.less <= limit * self.more
+    }
 }
 
 /// The least (`pick` = min) or greatest (max) of fl(fl(p − o)·i) over the corners of
@@ -168,18 +180,12 @@ fn corners<R: Real>(p: R, (o0, o1): (R, R), (i0, i1): (R, R), pick: fn(R, R) -> 
     pick(pick(a * i0, a * i1), pick(b * i0, b * i1))
 }
 
-/// The least and greatest value of `v` over `lanes`.
+/// The least and greatest value of `v` over `lanes` (at least one).
 #[inline(always)]
 fn range<V: Lanes, R: Real>(v: V, lanes: V::M) -> (R, R) {
-    let values = v.array();
-    let mut bits = lanes.bits();
-    let first = R::of(values[bits.trailing_zeros() as usize]);
-    let (mut lo, mut hi) = (first, first);
-    while bits != 0 {
-        let x = R::of(values[bits.trailing_zeros() as usize]);
-        bits &= bits - 1;
-        lo = lo.min(x);
-        hi = hi.max(x);
-    }
-    (lo, hi)
+    // Lanes outside `lanes` take the first lane's value, which changes neither bound.
+    let first = v.lane(lanes.bits().trailing_zeros() as usize);
+    let mut lo = R::lanes(V::select(lanes, v, V::splat(first)));
+    let mut hi = lo;
+    (fold::<V, R>(&mut lo, R::min), fold::<V, R>(&mut hi, R::max))
 }

@@ -14,7 +14,7 @@ use super::frustum::{Frustum, Real};
 use super::single::{self, Rays1};
 use super::wide::{MAX_DEPTH, Node, Tree, WIDTH};
 use super::{Rays, Slabs};
-use crate::lanes::{self, Lanes, Mask};
+use crate::lanes::{self, Lanes, MAX_LANES, Mask};
 use std::mem::MaybeUninit;
 
 /// What a walk does at a leaf, and which lanes still search and how far.
@@ -150,24 +150,40 @@ fn packet<V: Lanes, S: Visit<V>, R: Real>(
         entries: &mut entries,
         top: 0,
     };
+    // The bounds of the lanes still searching: a shadow packet's rays stop one by one, and
+    // the bounds of those left are tighter (a frustum of fewer lanes bounds each of them).
+    let mut frustum = *frustum;
+    let mut bounded = lanes.count();
     let mut limit = greatest::<V, R>(visit.limit(), lanes);
-    open_node(&mut stack, frustum, nodes, 0, limit);
-    while let Some((at, slot, _)) = stack.pop() {
-        let open = visit.open(lanes);
-        if !open.any() {
-            return;
+    open_node(&mut stack, &frustum, nodes, 0, limit);
+    while let Some((at, slot, near)) = stack.pop() {
+        // Pushed before the limit shrank: the packet's test with today's limit.
+        if !frustum.before(near, limit) {
+            continue;
         }
         let node = &nodes[at as usize];
         let c = slot as usize;
         if node.count[c] == 0 {
-            open_node(&mut stack, frustum, nodes, node.first[c], limit);
+            open_node(&mut stack, &frustum, nodes, node.first[c], limit);
             continue;
         }
         // The leaf's box again, lane by lane and against limits that may have shrunk.
+        let open = visit.open(lanes);
         let enter = slabs.enters_f32(node, c, visit.limit()).and(open);
-        if enter.any() {
-            visit.leaf(slabs, node.first[c] as usize, node.count[c] as usize, enter);
-            limit = greatest::<V, R>(visit.limit(), visit.open(lanes));
+        if !enter.any() {
+            continue;
+        }
+        visit.leaf(slabs, node.first[c] as usize, node.count[c] as usize, enter);
+        let open = visit.open(lanes);
+        if !open.any() {
+            return;
+        }
+        limit = greatest::<V, R>(visit.limit(), open);
+        let left = open.count();
+        if left * 4 <= bounded * 3
+            && let Some(f) = Frustum::new(slabs, open)
+        {
+            (frustum, bounded) = (f, left);
         }
     }
 }
@@ -175,7 +191,13 @@ fn packet<V: Lanes, S: Visit<V>, R: Real>(
 /// Pushes the children of node `at` that the packet may enter before `limit`, farthest
 /// first (so the nearest is opened next).
 #[inline(always)]
-fn open_node<R: Real>(stack: &mut Stack, frustum: &Frustum<R>, nodes: &[Node], at: u32, limit: R) {
+fn open_node<R: Real>(
+    stack: &mut Stack<(u32, u32, R)>,
+    frustum: &Frustum<R>,
+    nodes: &[Node],
+    at: u32,
+    limit: R,
+) {
     let (hit, near) = frustum.children(&nodes[at as usize], limit);
     let mut found = [(R::ZERO, 0u32); WIDTH];
     let mut n = 0;
@@ -187,8 +209,8 @@ fn open_node<R: Real>(stack: &mut Stack, frustum: &Frustum<R>, nodes: &[Node], a
         n += 1;
     }
     farthest_first(&mut found[..n]);
-    for &(_, c) in &found[..n] {
-        stack.push((at, c, 0));
+    for &(near, c) in &found[..n] {
+        stack.push((at, c, near));
     }
 }
 
@@ -273,17 +295,27 @@ pub(super) fn farthest_first<K: PartialOrd + Copy, T: Copy>(found: &mut [(K, T)]
     }
 }
 
-/// The greatest value of `v` over `lanes` (none: 0).
+/// The greatest value of `v` over `lanes` (none: 0; every limit is at least 0).
 #[inline(always)]
 fn greatest<V: Lanes, R: Real>(v: V, lanes: V::M) -> R {
-    let values = v.array();
-    let mut bits = lanes.bits();
-    let mut most = R::ZERO;
-    while bits != 0 {
-        most = most.max(R::of(values[bits.trailing_zeros() as usize]));
-        bits &= bits - 1;
+    let mut values = R::lanes(V::select(lanes, v, V::splat(0.0)));
+    fold::<V, R>(&mut values, R::max)
+}
+
+/// `pick` (min or max) over the first `V::N` of `values`, in halving steps: each step is a
+/// lane-wise `pick` of two halves, which the compiler turns into a few vector instructions
+/// (a fold lane after lane, the obvious loop, cost a tenth of a shadow walk). Every lane type
+/// has a power of two of lanes, so the halves always meet.
+#[inline(always)]
+pub(super) fn fold<V: Lanes, R: Real>(values: &mut [R; MAX_LANES], pick: fn(R, R) -> R) -> R {
+    let mut n = V::N;
+    while n > 1 {
+        n /= 2;
+        for k in 0..n {
+            values[k] = pick(values[k], values[k + n]);
+        }
     }
-    most
+    values[0]
 }
 
 /// The deepest walk: at most `WIDTH` − 1 siblings wait on each of `MAX_DEPTH` levels.
