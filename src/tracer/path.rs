@@ -75,7 +75,12 @@ pub fn trace_packet<V: Lanes>(
 #[inline(always)]
 fn follow<V: Lanes>(world: &World, eye: &Eye<V>, max_depth: u32, rays: &mut u64) -> (V3<V>, V::M) {
     if world.branches {
-        return super::glass::trace_tree(world, eye, max_depth, rays);
+        // Out of line: inlined here, the tree doubled the packet function, and its compile
+        // time (superlinear in a function's size) with it; a call per packet costs nothing.
+        return V::outlined(
+            #[inline(always)]
+            || super::glass::trace_tree(world, eye, max_depth, rays),
+        );
     }
     let background = Background::of(world);
     let mut ray = eye.rays;

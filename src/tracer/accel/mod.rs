@@ -263,6 +263,36 @@ impl Geometry {
             t = V::select(better, tp, t);
             object = V::select(better, V::splat(f64::from(p.object)), object);
         }
+        if self.meshes.is_empty() {
+            return Nearest {
+                hit: active.and(t.lt(V::splat(f64::INFINITY))),
+                t,
+                object,
+                u: V::splat(0.0),
+                v: V::splat(0.0),
+                prim: [NO_TRIANGLE; MAX_LANES],
+            };
+        }
+        // The mesh walks out of line, on a copy of the rays. A walk is large: inlined in each
+        // integrator, the walks made the packet function half walk, and its compile time
+        // (superlinear in a function's size) most of a build's. The copy keeps the caller's
+        // rays from escaping, so that they stay in registers (else the talk's eye rays cost a
+        // memcpy a packet, though it has no mesh).
+        let rays = *rays;
+        V::outlined(
+            #[inline(always)]
+            move || self.mesh_nearest(&rays, active, (t, object)),
+        )
+    }
+
+    /// `nearest` in the meshes, given the nearest hits `t` on `object` among the other shapes.
+    #[inline(always)]
+    fn mesh_nearest<V: Lanes>(
+        &self,
+        rays: &Rays<V>,
+        active: V::M,
+        (t, object): (V, V),
+    ) -> Nearest<V> {
         let mut best = Best {
             t,
             object,
@@ -278,7 +308,7 @@ impl Geometry {
                 best: &mut best,
             };
             walk::walk(top, rays, active, &mut visit);
-        } else if !self.meshes.is_empty() {
+        } else {
             let slabs = Slabs::new(rays, active);
             for m in &self.meshes {
                 let enter = m.entered(&slabs, best.t, active);
