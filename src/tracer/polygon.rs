@@ -307,16 +307,6 @@ fn indices(world: &World, (object, prim, _, _): (usize, u32, f64, f64)) -> [u32;
     placed(world, object).1.triangles[prim as usize]
 }
 
-/// The file positions (0–2) and vertex normals (3–5) of the corners `tri` of a triangle of
-/// mesh object `object`.
-#[inline(always)]
-fn vertices(world: &World, object: usize, tri: [u32; 3]) -> [DVec3; 6] {
-    let m = placed(world, object).1;
-    let (p, n) = (&m.positions, &m.normals);
-    let (a, b, c) = (tri[0] as usize, tri[1] as usize, tri[2] as usize);
-    [p[a], p[b], p[c], n[a], n[b], n[c]]
-}
-
 /// The geometric and shading normals of one lane that hit the triangle of `object` with vertex
 /// indices `tri` at barycentrics (u, v), and the object's shading model. Scalar f64 code,
 /// compiled once for every kernel (in `gather`).
@@ -326,9 +316,9 @@ fn normals(
     (object, _, u, v): (usize, u32, f64, f64),
     tri: [u32; 3],
 ) -> (DVec3, DVec3, MeshShading) {
-    let (place, _, shading) = placed(world, object);
-    let data = vertices(world, object, tri);
-    let (q, n) = (&data[..3], &data[3..]);
+    let (place, m, shading) = placed(world, object);
+    let q = tri.map(|i| m.positions[i as usize]);
+    let n = tri.map(|i| m.normals[i as usize]);
     let b = [1.0 - u - v, u, v];
     let wound = place.normal((q[1] - q[0]).cross(q[2] - q[0]));
     let smooth = smooth_or(&place, n[0] * b[0] + n[1] * b[1] + n[2] * b[2], wound);
@@ -360,12 +350,17 @@ fn smooth_or(place: &Placement, sum: DVec3, wound: DVec3) -> DVec3 {
 
 /// Corner `i` of one lane's triangle placed, or (`normal`) its vertex normal placed.
 #[inline(never)]
-fn corner(world: &World, at: (usize, u32, f64, f64), i: usize, normal: bool) -> DVec3 {
-    let place = placed(world, at.0).0;
-    let data = vertices(world, at.0, indices(world, at));
+fn corner(
+    world: &World,
+    (object, prim, _, _): (usize, u32, f64, f64),
+    i: usize,
+    normal: bool,
+) -> DVec3 {
+    let (place, m, _) = placed(world, object);
+    let v = m.triangles[prim as usize][i] as usize;
     match normal {
-        false => place.point(data[i]),
-        true => place.normal(data[3 + i]),
+        false => place.point(m.positions[v]),
+        true => place.normal(m.normals[v]),
     }
 }
 
