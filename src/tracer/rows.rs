@@ -109,6 +109,26 @@ impl Pixels {
         Pixels { rows, cols, valid }
     }
 
+    /// The pixels of the tile of a band (`rows` rows from `top`, `w` columns) whose left
+    /// column is `left`: lane k is the tile's pixel (k / tile width, k % tile width), valid
+    /// inside the band and the frame. A tile wholly inside needs no test a lane.
+    #[inline(always)]
+    fn tile<V: Lanes>(top: u32, left: u32, rows: u32, w: u32) -> Pixels {
+        let tile_w = (V::N / tile_rows(V::N)) as u32;
+        if rows < tile_rows(V::N) as u32 || left + tile_w > w {
+            return Pixels::new(V::N, |k| {
+                let (r, c) = (k as u32 / tile_w, left + k as u32 % tile_w);
+                (r < rows && c < w).then_some((top + r, c))
+            });
+        }
+        let (mut rows, mut cols) = ([0; MAX_LANES], [0; MAX_LANES]);
+        for k in 0..V::N {
+            (rows[k], cols[k]) = (top + k as u32 / tile_w, left + k as u32 % tile_w);
+        }
+        let valid = u32::MAX >> (MAX_LANES - V::N);
+        Pixels { rows, cols, valid }
+    }
+
     /// The lanes holding a pixel, in order: one step per set bit of `valid`.
     fn lanes(&self) -> impl Iterator<Item = usize> + use<> {
         let mut rest = self.valid;
@@ -132,11 +152,11 @@ pub(super) const fn tile_rows(n: usize) -> usize {
     }
 }
 
-/// What a packet found for its pixels: the f32 means (already made finite), spreads and
-/// coverage (0 without alpha).
+/// What a packet found for its pixels: the f32 means (already made finite) a channel at a
+/// time, as the lanes store them, spreads and coverage (0 without alpha).
 #[derive(Default)]
 struct Means {
-    rgb: [[f32; 3]; MAX_LANES],
+    rgb: [[f32; MAX_LANES]; 3],
     spread: [f32; MAX_LANES],
     alpha: [f32; MAX_LANES],
 }
@@ -159,10 +179,7 @@ pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
         if pass.stopped() {
             break;
         }
-        let pixels = Pixels::new(V::N, |k| {
-            let (r, c) = (k as u32 / tile_w, left + k as u32 % tile_w);
-            (k < V::N && r < rows && c < w).then_some((top + r, c))
-        });
+        let pixels = Pixels::tile::<V>(top, left, rows, w);
         packet::<V>(
             pass,
             &pixels,
@@ -171,14 +188,21 @@ pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
             &mut stats,
             &mut means,
         );
-        for k in pixels.lanes() {
-            let i = (pixels.rows[k] - top) as usize * w as usize + pixels.cols[k] as usize;
-            rgb[3 * i..][..3].copy_from_slice(&means.rgb[k]);
+        // Lane k is the tile's pixel (k / tile_w, k % tile_w); those inside the band and
+        // the frame are its valid lanes, stored a tile row at a time.
+        let cols = tile_w.min(w - left) as usize;
+        for r in 0..tile_rows(V::N).min(rows as usize) {
+            let (start, lane) = (r * w as usize + left as usize, r * tile_w as usize);
+            let [r, g, b] = means.rgb.each_ref().map(|c| &c[lane..][..cols]);
+            let dst = rgb[3 * start..][..3 * cols].chunks_exact_mut(3);
+            for (dst, ((&r, &g), &b)) in dst.zip(r.iter().zip(g).zip(b)) {
+                dst.copy_from_slice(&[r, g, b]);
+            }
             if let Some(spread) = spread.as_deref_mut() {
-                spread[i] = means.spread[k];
+                spread[start..][..cols].copy_from_slice(&means.spread[lane..][..cols]);
             }
             if let Some(alpha) = alpha.as_deref_mut() {
-                alpha[i] = means.alpha[k];
+                alpha[start..][..cols].copy_from_slice(&means.alpha[lane..][..cols]);
             }
         }
     }
@@ -217,8 +241,8 @@ pub(super) fn marked<V: Lanes>(
             &mut means,
         );
         for (k, o) in out.iter_mut().enumerate() {
-            let c = means.rgb[k];
-            *o = [c[0], c[1], c[2], means.alpha[k], means.spread[k]];
+            let c = &means.rgb;
+            *o = [c[0][k], c[1][k], c[2][k], means.alpha[k], means.spread[k]];
         }
     }
     stats
@@ -465,13 +489,14 @@ fn edge_spread(means: &mut Means, n: u32) {
     }
 }
 
-/// Each lane's mean as f32. When every value is within ±f32::MAX (the usual case, checked in
-/// the vector) the conversion cannot overflow or give NaN, and `finite` would change nothing.
+/// Each lane's mean as f32, a channel at a time. When every value is within ±f32::MAX (the
+/// usual case, checked in the vector) the conversion cannot overflow or give NaN, and `finite`
+/// would change nothing.
 #[inline(always)]
 fn finish<V: Lanes>(
     mean: V3<V>,
     px: &Pixels,
-    rgb: &mut [[f32; 3]; MAX_LANES],
+    rgb: &mut [[f32; MAX_LANES]; 3],
     stats: &mut RowStats,
 ) {
     let (max, min) = (
@@ -480,18 +505,16 @@ fn finish<V: Lanes>(
     );
     let within = |v: V| v.le(max).and(min.le(v));
     let tame = within(mean.x).and(within(mean.y)).and(within(mean.z));
-    let mut c = [[0f32; MAX_LANES]; 3];
-    mean.x.store_f32(&mut c[0]);
-    mean.y.store_f32(&mut c[1]);
-    mean.z.store_f32(&mut c[2]);
-    let tame = tame.bits() & px.valid == px.valid;
+    mean.x.store_f32(&mut rgb[0]);
+    mean.y.store_f32(&mut rgb[1]);
+    mean.z.store_f32(&mut rgb[2]);
+    if tame.bits() & px.valid == px.valid {
+        return;
+    }
     for lane in px.lanes() {
-        let m = &mut rgb[lane];
-        *m = [c[0][lane], c[1][lane], c[2][lane]];
-        if !tame {
-            stats.non_finite += m.iter().filter(|v| !v.is_finite()).count() as u64;
-            *m = finite(*m);
-        }
+        let m = [rgb[0][lane], rgb[1][lane], rgb[2][lane]];
+        stats.non_finite += m.iter().filter(|v| !v.is_finite()).count() as u64;
+        [rgb[0][lane], rgb[1][lane], rgb[2][lane]] = finite(m);
     }
 }
 
