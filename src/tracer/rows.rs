@@ -193,9 +193,9 @@ pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
         let cols = tile_w.min(w - left) as usize;
         for r in 0..tile_rows(V::N).min(rows as usize) {
             let (start, lane) = (r * w as usize + left as usize, r * tile_w as usize);
-            let [r, g, b] = means.rgb.each_ref().map(|c| &c[lane..][..cols]);
+            let [red, green, blue] = means.rgb.each_ref().map(|c| &c[lane..][..cols]);
             let dst = rgb[3 * start..][..3 * cols].chunks_exact_mut(3);
-            for (dst, ((&r, &g), &b)) in dst.zip(r.iter().zip(g).zip(b)) {
+            for (dst, ((&r, &g), &b)) in dst.zip(red.iter().zip(green).zip(blue)) {
                 dst.copy_from_slice(&[r, g, b]);
             }
             if let Some(spread) = spread.as_deref_mut() {

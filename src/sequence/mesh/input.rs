@@ -185,7 +185,8 @@ enum Digest {
 
 /// Files from 1 MiB have their digest taken beside their parsing.
 const BESIDE_FROM: u64 = 1 << 20;
-/// Bytes handed to the digest's thread at a time (at most `QUEUED` batches wait).
+/// Bytes handed to the digest's thread at a time (at most `QUEUED` batches wait: with the
+/// one being hashed and the one filling, under 2 MiB, left to the budget's reserve).
 const BATCH: usize = 1 << 18;
 const QUEUED: usize = 4;
 
