@@ -3,7 +3,7 @@
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output};
+use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 pub fn bin() -> Command {
@@ -171,15 +171,32 @@ pub fn assert_same_files(a: &Path, b: &Path) {
     }
 }
 
-/// How a child ended: exit code, stderr, wall time and peak resident memory.
+/// How a child ended: exit code, stderr, wall time, CPU time and peak resident memory.
 pub struct Run {
     pub code: Option<i32>,
     pub stderr: String,
     pub seconds: f64,
+    /// User and system time: what a limit on work should test, as a shared machine's load
+    /// stretches the wall time several-fold.
+    pub cpu_seconds: f64,
     pub peak_kb: u64,
 }
 
-/// Waits for `child` while `feed` runs, with its exit code, stderr, wall time and peak RSS.
+/// Runs `command` (stdin and stdout closed, stderr kept) and measures it: what a limit on the
+/// work a run does should test, as the CPU time does not stretch with a shared machine's load.
+pub fn cpu_timed(command: &mut Command) -> Run {
+    let started = Instant::now();
+    let child = command
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the command runs");
+    measure(child, started, |_| {})
+}
+
+/// Waits for `child` while `feed` runs, with its exit code, stderr, wall and CPU time and peak
+/// RSS.
 pub fn measure(mut child: Child, started: Instant, feed: impl FnOnce(&mut Child)) -> Run {
     let pid = child.id() as libc::pid_t;
     let mut err = child.stderr.take().expect("stderr is piped");
@@ -211,6 +228,10 @@ pub fn measure(mut child: Child, started: Instant, feed: impl FnOnce(&mut Child)
         code: libc::WIFEXITED(status).then(|| libc::WEXITSTATUS(status)),
         stderr: reader.join().unwrap(),
         seconds,
+        cpu_seconds: [usage.ru_utime, usage.ru_stime]
+            .iter()
+            .map(|t| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6)
+            .sum(),
         peak_kb: usage.ru_maxrss as u64,
     }
 }
