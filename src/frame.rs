@@ -44,21 +44,24 @@ impl Frame {
         [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
     }
 
-    /// 8-bit RGB(A) in the frame's encoding (see `levels`).
+    /// 8-bit RGB(A) in the frame's encoding (see `levels`), in a recycled buffer when one of
+    /// its length is spare (`recycle_bytes`).
     pub fn to_rgb8(&self) -> Vec<u8> {
-        self.levels(255.0)
+        let len = self.rgb.len() / 3 * if self.alpha.is_some() { 4 } else { 3 };
+        self.levels(255.0, spare_bytes(len))
     }
 
     /// 16-bit RGB(A) in the frame's encoding.
     pub(crate) fn to_rgb16(&self) -> Vec<u16> {
-        self.levels(65535.0)
+        self.levels(65535.0, Vec::new())
     }
 
     /// Linear: round(max · clamp(c, 0, 1)); sRGB: the exact curve's level (`transfer`). With
     /// alpha the colour is made straight first (c/α, 0 where α = 0) and α is appended, linear.
-    fn levels<T: Level>(&self, max: f32) -> Vec<T> {
+    /// `out` is overwritten whole (its length is set to the frame's values).
+    fn levels<T: Level>(&self, max: f32, mut out: Vec<T>) -> Vec<T> {
         let Some(alpha) = &self.alpha else {
-            let mut out = vec![T::from_level(0); self.rgb.len()];
+            out.resize(self.rgb.len(), T::from_level(0));
             encode_slice(&self.rgb, &mut out, max, self.encoding);
             return out;
         };
@@ -67,7 +70,7 @@ impl Frame {
             let straight = |v: f32| if a > 0.0 { v / a } else { 0.0 };
             rgba.extend([straight(c[0]), straight(c[1]), straight(c[2]), a]);
         }
-        let mut out = vec![T::from_level(0); rgba.len()];
+        out.resize(rgba.len(), T::from_level(0));
         encode_slice(&rgba, &mut out, max, self.encoding);
         for (o, &a) in out.chunks_exact_mut(4).zip(alpha) {
             o[3] = T::from_level(quantize(a, max));
@@ -101,6 +104,28 @@ pub(crate) fn buffer(len: usize) -> Vec<f32> {
     match spare.iter().position(|b| b.len() == len) {
         Some(i) => spare.swap_remove(i),
         None => vec![0.0; len],
+    }
+}
+
+/// Spare 8-bit frames: a 1080p stream wrote 6.2 MB of fresh pages a frame, each page a fault
+/// and a clearing (about 3% of the talk's f32 stream in `perf`). The raw stream's writer gives
+/// them back (`recycle_bytes`); at most `MAX_SPARE` wait here.
+static SPARE_BYTES: std::sync::Mutex<Vec<Vec<u8>>> = std::sync::Mutex::new(Vec::new());
+
+/// A byte buffer of length `len` if one is spare, else an empty one to be grown.
+fn spare_bytes(len: usize) -> Vec<u8> {
+    let mut spare = SPARE_BYTES.lock().unwrap_or_else(|e| e.into_inner());
+    match spare.iter().position(|b| b.len() == len) {
+        Some(i) => spare.swap_remove(i),
+        None => Vec::new(),
+    }
+}
+
+/// Gives back bytes that were written out (a stream's frame), for the next `to_rgb8`.
+pub(crate) fn recycle_bytes(bytes: Vec<u8>) {
+    let mut spare = SPARE_BYTES.lock().unwrap_or_else(|e| e.into_inner());
+    if spare.len() < MAX_SPARE {
+        spare.push(bytes);
     }
 }
 
@@ -239,6 +264,35 @@ mod tests {
         };
         assert_eq!(f.to_rgb8(), vec![0, 128, 255, 0, 255, 51]);
         assert_eq!(f.to_rgb16()[1], 32768);
+    }
+
+    /// A recycled byte buffer is overwritten whole: garbage left in it never reaches a frame,
+    /// with alpha (4 values a pixel, from a buffer of 3-value length) or without.
+    #[test]
+    fn recycled_bytes_are_overwritten_whole() {
+        for alpha in [None, Some(vec![1.0, 0.5, 0.0, 0.25])] {
+            for encoding in [Encoding::Linear, Encoding::Srgb] {
+                let f = Frame {
+                    width: 4,
+                    height: 1,
+                    rgb: (0..12).map(|i| i as f32 / 11.0 - 0.1).collect(),
+                    depth: None,
+                    alpha: alpha.clone(),
+                    aov: None,
+                    encoding,
+                    non_finite: 0,
+                    samples: 1,
+                    rays: 1,
+                };
+                let fresh = f.to_rgb8();
+                for len in [12, 16] {
+                    recycle_bytes(vec![0xab; len]);
+                }
+                let again = f.to_rgb8();
+                assert_eq!(again, fresh, "{alpha:?} {encoding:?}");
+                recycle_bytes(again);
+            }
+        }
     }
 
     /// Milliseconds to encode a 1920×1080 frame of varied values, each encoding and depth:

@@ -45,6 +45,9 @@ pub(crate) fn encode(
     let mut writer = enc.write_header()?;
     writer.write_image_data(&data)?;
     writer.finish()?;
+    if !sixteen_bit {
+        crate::frame::recycle_bytes(data);
+    }
     Ok(out)
 }
 

@@ -45,9 +45,11 @@ impl<'a> Delivery<'a> {
         Delivery {
             batch,
             progress,
-            stream: batch
-                .stream
-                .map(|_| Reorder::new(&batch.tasks, StreamWriter::start(out))),
+            stream: batch.stream.map(|(format, sixteen)| {
+                // Raw 8-bit frames are `to_rgb8`'s buffers: given back once written.
+                let recycle = format == crate::output::stream::StreamFormat::Raw && !sixteen;
+                Reorder::new(&batch.tasks, StreamWriter::start(out, recycle))
+            }),
             written: 0,
             held: Vec::new(),
             claimed: Vec::new(),

@@ -58,12 +58,17 @@ pub(super) struct StreamWriter {
 }
 
 impl StreamWriter {
-    pub(super) fn start(mut out: Box<dyn Write + Send>) -> StreamWriter {
+    /// `recycle`: the frames are `Frame::to_rgb8`'s bytes, given back for the next frame's
+    /// once written.
+    pub(super) fn start(mut out: Box<dyn Write + Send>, recycle: bool) -> StreamWriter {
         let (frames, todo) = mpsc::channel::<Vec<u8>>();
         let (done, written) = mpsc::channel();
         std::thread::spawn(move || {
             for bytes in todo {
                 let result = out.write_all(&bytes).and_then(|()| out.flush());
+                if recycle {
+                    crate::frame::recycle_bytes(bytes);
+                }
                 if done.send(result).is_err() {
                     break;
                 }
