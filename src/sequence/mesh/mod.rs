@@ -249,32 +249,38 @@ fn finish(file: &Path, soup: Soup) -> Result<Loaded, Fail> {
 }
 
 /// The file's normal where it gives a usable one (finite, non-zero: `unit`), else the
-/// area-weighted normal of the faces around the vertex; and how many came from the file.
+/// area-weighted normal of the faces around the vertex; and how many came from the file. The
+/// faces' normals are summed only when some vertex needs them (a file with every normal, as
+/// most scanned and exported models are, skips a pass over every triangle).
 fn vertex_normals(
     positions: &[DVec3],
     triangles: &[[u32; 3]],
     normals: Option<Vec<DVec3>>,
     has_normal: Option<Vec<bool>>,
 ) -> (Vec<DVec3>, usize) {
-    let face = area_weighted(positions, triangles);
-    let Some(n) = normals else {
-        return (face, 0);
+    let Some(mut normals) = normals else {
+        return (area_weighted(positions, triangles), 0);
     };
     let mut from_file = 0;
-    let normals = n
-        .iter()
-        .enumerate()
-        .map(|(i, &v)| {
-            let given = has_normal.as_ref().is_none_or(|h| h[i]);
-            let u = unit(v);
-            if given && u != DVec3::ZERO && u.is_finite() {
-                from_file += 1;
-                u
-            } else {
-                face[i]
+    for (i, v) in normals.iter_mut().enumerate() {
+        let given = has_normal.as_ref().is_none_or(|h| h[i]);
+        let u = unit(*v);
+        // Zero marks a vertex the faces must give: a usable unit normal is never zero.
+        *v = if given && u != DVec3::ZERO && u.is_finite() {
+            from_file += 1;
+            u
+        } else {
+            DVec3::ZERO
+        };
+    }
+    if from_file < normals.len() {
+        let face = area_weighted(positions, triangles);
+        for (v, f) in normals.iter_mut().zip(face) {
+            if *v == DVec3::ZERO {
+                *v = f;
             }
-        })
-        .collect();
+        }
+    }
     (normals, from_file)
 }
 

@@ -347,6 +347,68 @@ mod tests {
         }
     }
 
+    /// Triangle rows taken straight (`ply_rows::triangle_rows`) give what the general reader
+    /// gives, around a quad, a 2-corner face and either index type; an index to refuse is
+    /// refused with the same face named.
+    #[test]
+    fn triangle_rows_read_as_the_general_reader_does() {
+        let faces: Vec<Vec<i64>> = vec![
+            vec![0, 1, 2],
+            vec![2, 1, 0],
+            vec![0, 1, 2, 3],
+            vec![1, 2],
+            vec![3, 2, 1],
+            vec![1, 3, 2],
+        ];
+        let file = |format: &str, ty: &str, faces: &[Vec<i64>]| {
+            let mut b = format!(
+                "ply\nformat {format} 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face {}\nproperty list uchar {ty} vertex_indices\nend_header\n",
+                faces.len()
+            )
+            .into_bytes();
+            for (x, y) in [(0.0f32, 0.0f32), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+                for v in [x, y, 0.0] {
+                    match format {
+                        "ascii" => b.extend(format!("{v} ").as_bytes()),
+                        _ => b.extend(v.to_le_bytes()),
+                    }
+                }
+                if format == "ascii" {
+                    b.push(b'\n');
+                }
+            }
+            for f in faces {
+                match format {
+                    "ascii" => {
+                        let words: Vec<String> = f.iter().map(|v| v.to_string()).collect();
+                        b.extend(format!("{} {}\n", f.len(), words.join(" ")).as_bytes());
+                    }
+                    _ => {
+                        b.push(f.len() as u8);
+                        for &v in f {
+                            b.extend((v as u32).to_le_bytes());
+                        }
+                    }
+                }
+            }
+            b
+        };
+        let expected = read_bytes(&file("ascii", "int", &faces)).unwrap().triangles;
+        assert_eq!(expected.len(), 6);
+        for ty in ["int", "uint"] {
+            let got = read_bytes(&file("binary_little_endian", ty, &faces)).unwrap();
+            assert_eq!(got.triangles, expected, "{ty}");
+        }
+        for (bad, ty) in [(4, "uint"), (4, "int"), (-1, "int")] {
+            let mut refused = faces.clone();
+            refused[4][1] = bad;
+            let e = read_bytes(&file("binary_little_endian", ty, &refused))
+                .err()
+                .unwrap();
+            assert_eq!(e.where_.as_deref(), Some("face 4"), "{bad} {ty}");
+        }
+    }
+
     const HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nproperty double nx\nproperty double ny\nproperty double nz\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n";
 
     #[test]

@@ -267,6 +267,32 @@ fn finite<'a>(
     }
 }
 
+/// A face row as most binary files write it: a `uchar` count of 3, then three little-endian
+/// 32-bit indices.
+const TRIANGLE_ROW: usize = 13;
+
+/// The leading rows of `rows` (whole `TRIANGLE_ROW`s) that are triangles of valid indices
+/// (below `count`, and not negative for `int`), pushed as they are; how many. The first other
+/// row (a longer list, or an index to refuse) stops it, and the general reader takes that row
+/// on, with the same result as if it had read them all: a triangle's fan is itself.
+fn triangle_rows(rows: &[u8], count: u32, ty: Scalar, out: &mut Vec<[u32; 3]>) -> usize {
+    let limit = match ty {
+        Scalar::I32 => count.min(1 << 31),
+        _ => count,
+    };
+    let mut taken = 0;
+    for row in rows.chunks_exact(TRIANGLE_ROW) {
+        let at = |k: usize| u32::from_le_bytes(row[1 + 4 * k..5 + 4 * k].try_into().unwrap());
+        let t = [at(0), at(1), at(2)];
+        if row[0] != 3 || t.iter().any(|&v| v >= limit) {
+            break;
+        }
+        out.push(t);
+        taken += 1;
+    }
+    taken
+}
+
 /// The `face` element, which may come before or after `vertex`: indices are checked at once
 /// when the vertices are known, else the largest is kept and checked at the end.
 #[derive(Default)]
@@ -347,6 +373,18 @@ impl Faces {
         let big = body.format == Format::Big;
         let buf = body.input.buffered()?;
         let (mut at, mut i) = (0, first);
+        if let (Scalar::U8, Scalar::I32 | Scalar::U32, false, (count, true)) = (c, ty, big, known) {
+            let rows =
+                (buf.len() / TRIANGLE_ROW).min(usize::try_from(e.count - i).unwrap_or(usize::MAX));
+            budget::grow(&mut soup.triangles, rows, || "the mesh's triangles".into())?;
+            let taken = triangle_rows(
+                &buf[..rows * TRIANGLE_ROW],
+                count as u32,
+                ty,
+                &mut soup.triangles,
+            );
+            (at, i) = (taken * TRIANGLE_ROW, i + taken as u64);
+        }
         while i < e.count && at + cs <= buf.len() {
             let len = list_len(decode(c, big, &buf[at..]), "face", i)?;
             let end = usize::try_from(len)
