@@ -81,52 +81,62 @@ impl Frame {
     /// Gives the frame's buffers back for the next frame of the same size: a 1080p frame is
     /// 25 MB, and every fresh page of it costs a page fault.
     pub(crate) fn recycle(self) {
-        let mut spare = SPARE.lock().unwrap_or_else(|e| e.into_inner());
         for buffer in std::iter::once(self.rgb)
             .chain(self.depth)
             .chain(self.alpha)
         {
-            if spare.len() < MAX_SPARE {
-                spare.push(buffer);
-            }
+            FLOATS.give(buffer);
         }
     }
 }
 
-/// Spare buffers: a run keeps at most threads + 2 frames in flight, so a few suffice.
+/// Buffers of frames gone, kept for the next frames of the same size: a run keeps at most
+/// threads + 2 frames in flight, so `MAX_SPARE` of each kind suffice.
+struct Spare<T>(std::sync::Mutex<Vec<Vec<T>>>);
+
 const MAX_SPARE: usize = 8;
-static SPARE: std::sync::Mutex<Vec<Vec<f32>>> = std::sync::Mutex::new(Vec::new());
+
+impl<T> Spare<T> {
+    const fn new() -> Spare<T> {
+        Spare(std::sync::Mutex::new(Vec::new()))
+    }
+
+    /// A spare buffer of length `len`, if there is one.
+    fn take(&self, len: usize) -> Option<Vec<T>> {
+        let mut spare = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        let i = spare.iter().position(|b| b.len() == len)?;
+        Some(spare.swap_remove(i))
+    }
+
+    fn give(&self, buffer: Vec<T>) {
+        let mut spare = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if spare.len() < MAX_SPARE {
+            spare.push(buffer);
+        }
+    }
+}
+
+/// The tracer's float planes (colour, depth, coverage).
+static FLOATS: Spare<f32> = Spare::new();
+/// 8-bit frames: a 1080p stream wrote 6.2 MB of fresh pages a frame, each page a fault and a
+/// clearing (about 3% of the talk's f32 stream in `perf`). The raw stream's writer and the PNG
+/// encoder give them back (`recycle_bytes`).
+static BYTES: Spare<u8> = Spare::new();
 
 /// A buffer of `len` floats, recycled when one of that length is spare. Its contents are
 /// whatever the last frame left: the tracer writes every value before anything reads it.
 pub(crate) fn buffer(len: usize) -> Vec<f32> {
-    let mut spare = SPARE.lock().unwrap_or_else(|e| e.into_inner());
-    match spare.iter().position(|b| b.len() == len) {
-        Some(i) => spare.swap_remove(i),
-        None => vec![0.0; len],
-    }
+    FLOATS.take(len).unwrap_or_else(|| vec![0.0; len])
 }
-
-/// Spare 8-bit frames: a 1080p stream wrote 6.2 MB of fresh pages a frame, each page a fault
-/// and a clearing (about 3% of the talk's f32 stream in `perf`). The raw stream's writer gives
-/// them back (`recycle_bytes`); at most `MAX_SPARE` wait here.
-static SPARE_BYTES: std::sync::Mutex<Vec<Vec<u8>>> = std::sync::Mutex::new(Vec::new());
 
 /// A byte buffer of length `len` if one is spare, else an empty one to be grown.
 fn spare_bytes(len: usize) -> Vec<u8> {
-    let mut spare = SPARE_BYTES.lock().unwrap_or_else(|e| e.into_inner());
-    match spare.iter().position(|b| b.len() == len) {
-        Some(i) => spare.swap_remove(i),
-        None => Vec::new(),
-    }
+    BYTES.take(len).unwrap_or_default()
 }
 
 /// Gives back bytes that were written out (a stream's frame), for the next `to_rgb8`.
 pub(crate) fn recycle_bytes(bytes: Vec<u8>) {
-    let mut spare = SPARE_BYTES.lock().unwrap_or_else(|e| e.into_inner());
-    if spare.len() < MAX_SPARE {
-        spare.push(bytes);
-    }
+    BYTES.give(bytes);
 }
 
 fn encode_slice<T: Level>(src: &[f32], dst: &mut [T], max: f32, encoding: Encoding) {
