@@ -22,16 +22,7 @@ const MAX_WALL_SECONDS: f64 = 15.0;
 const MAX_PEAK_KB: u64 = 100 * 1024;
 
 fn check(dir: &Path, name: &str) -> Run {
-    let started = Instant::now();
-    let child = bin()
-        .args(["check", name])
-        .current_dir(dir)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("rayreel runs");
-    measure(child, started, |_| {})
+    cpu_timed(bin().args(["check", name]).current_dir(dir))
 }
 
 /// Writes `name` in `dir` from `head`, `count` copies of `chunk`, then `tail`.
