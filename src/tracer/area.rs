@@ -7,7 +7,7 @@
 
 use super::World;
 use super::path::LightSeeds;
-use super::shade::{Here, Surface, shine, towards};
+use super::shade::{Here, Surface, Tints, shine, towards};
 use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
 use crate::scene::Light;
 use glam::DVec3;
@@ -73,11 +73,15 @@ pub(super) fn light<V: Lanes>(
         None => None,
     };
     let share = Some(V::splat(1.0 / f64::from(m)));
+    let tints = Tints::new(s, &i);
     let mut q = [[0.0; MAX_LANES]; 3];
-    for j in 0..m {
-        points.place::<V::F64>(k * m + j, V::N, &mut q);
+    // Points k·m … k·m + m − 1 of the sequence.
+    let mut sequence = super::sample::Points02::at(k * m);
+    for _ in 0..m {
+        points.place::<V::F64>(sequence.words(), V::N, &mut q);
+        sequence.advance();
         let (l, d) = towards(at.point, V3::load(&q, 0));
-        shine(world, s, at, (lit, seen), (l, d), &i, share, sum, rays);
+        shine(world, s, at, (lit, seen), (l, d), &tints, share, sum, rays);
     }
 }
 
@@ -90,7 +94,8 @@ struct AreaPoints {
     /// Lanes to place points for (bit k for lane k): active, in front of a rect, outside a
     /// sphere.
     lanes: u32,
-    shift: [(u32, u32); MAX_LANES],
+    /// Each lane's digital shift: sx in the first array, sy in the second.
+    shift: [[u32; MAX_LANES]; 2],
     shape: AreaShape,
 }
 
@@ -124,10 +129,10 @@ impl AreaPoints {
         lit: V::M,
     ) -> AreaPoints {
         let mut lanes = lit.bits();
-        let mut shift = [(0, 0); MAX_LANES];
-        for (k, s) in shift.iter_mut().enumerate().take(V::N) {
+        let mut shift = [[0; MAX_LANES]; 2];
+        for (k, seed) in seeds.iter().enumerate().take(V::N) {
             if lanes >> k & 1 == 1 {
-                *s = super::sample::light_shift(seeds[k], index);
+                (shift[0][k], shift[1][k]) = super::sample::light_shift(*seed, index);
             }
         }
         let shape = match *light {
@@ -161,18 +166,18 @@ impl AreaPoints {
         }
     }
 
-    /// Point g of each lane's sequence on the light into `out`, for lanes 0 … lanes − 1 (the
-    /// light's centre or corner on lanes that take no points), computed in the f64 lanes `W`,
-    /// `W::N` lanes at a time.
+    /// The point of each lane's sequence whose words (`sobol02` of its index) are
+    /// `(gx, gy)` on the light into `out`, for lanes 0 … lanes − 1 (the light's centre or
+    /// corner on lanes that take no points), computed in the f64 lanes `W`, `W::N` lanes at a
+    /// time.
     #[inline(always)]
-    fn place<W: Lanes>(&self, g: u32, lanes: usize, out: &mut Axes) {
-        use super::sample::{sobol02, unit32};
-        let (gx, gy) = sobol02(g);
+    fn place<W: Lanes>(&self, (gx, gy): (u32, u32), lanes: usize, out: &mut Axes) {
+        use super::sample::unit32;
         for c in (0..lanes).step_by(W::N) {
             let live = W::M::from_bits(self.lanes >> c);
             // The sequence's coordinates: integer work, lane by lane.
-            let x = W::from_fn(|k| unit32(gx ^ self.shift[c + k].0));
-            let y = W::from_fn(|k| unit32(gy ^ self.shift[c + k].1));
+            let x = W::from_fn(|k| unit32(gx ^ self.shift[0][c + k]));
+            let y = W::from_fn(|k| unit32(gy ^ self.shift[1][c + k]));
             let (p, idle) = match &self.shape {
                 AreaShape::Rect {
                     corner,

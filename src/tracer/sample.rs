@@ -195,6 +195,58 @@ pub fn sobol02(g: u32) -> (u32, u32) {
     (g.reverse_bits(), y)
 }
 
+/// The points g, g + 1, … of `sobol02` in turn, each from the one before by the bits that
+/// change: g ⊕ (g + 1) is a run of t + 1 low ones (t the trailing ones of g), and both
+/// coordinates are linear in g's bits over XOR, so the radical inverse flips the run's
+/// reversal and Sobol's coordinate takes the XOR of v_0 … v_t (`RUNS`). The same words as
+/// `sobol02(g)` for every g, at a few instructions a point instead of a loop over g's bits.
+#[derive(Debug, Clone, Copy)]
+pub struct Points02 {
+    g: u32,
+    x: u32,
+    y: u32,
+}
+
+/// RUNS[t] = v_0 ⊕ v_1 ⊕ … ⊕ v_t, Sobol's second coordinate of 2^(t+1) − 1.
+const RUNS: [u32; 32] = {
+    let (mut runs, mut v, mut acc, mut t) = ([0u32; 32], 1u32 << 31, 0u32, 0);
+    while t < 32 {
+        acc ^= v;
+        runs[t] = acc;
+        v ^= v >> 1;
+        t += 1;
+    }
+    runs
+};
+
+impl Points02 {
+    /// The walk from point `g`.
+    #[inline]
+    pub fn at(g: u32) -> Points02 {
+        let (x, y) = sobol02(g);
+        Points02 { g, x, y }
+    }
+
+    /// The current point's two 32-bit coordinates (`sobol02` of its index).
+    #[inline]
+    pub fn words(&self) -> (u32, u32) {
+        (self.x, self.y)
+    }
+
+    /// Moves to the next point (after 2^32 − 1 it wraps to 0, as `sobol02` of g + 1 would).
+    #[inline]
+    pub fn advance(&mut self) {
+        let t = self.g.trailing_ones();
+        if t == 32 {
+            *self = Points02::at(0);
+            return;
+        }
+        self.x ^= !(u32::MAX >> (t + 1));
+        self.y ^= RUNS[t as usize];
+        self.g += 1;
+    }
+}
+
 /// 32 bits as a fraction in [0, 1): b·2^-32, exact.
 #[inline]
 pub fn unit32(b: u32) -> f64 {
@@ -273,6 +325,18 @@ mod tests {
             }
         }
         assert_eq!(sobol02(0), (0, 0));
+        // The walk gives the same words as the definition, from any start and across carries.
+        for start in [0, 1, 7, 4095 * 16, (1 << 24) - 3, u32::MAX - 2] {
+            let mut walk = Points02::at(start);
+            for n in 0..70u32 {
+                assert_eq!(
+                    walk.words(),
+                    sobol02(start.wrapping_add(n)),
+                    "{start} + {n}"
+                );
+                walk.advance();
+            }
+        }
         assert_eq!(sobol02(1), (1 << 31, 1 << 31));
         assert_eq!(sobol02(2), (1 << 30, 0xc000_0000));
         assert_eq!(sobol02(3), (0xc000_0000, 0x4000_0000));

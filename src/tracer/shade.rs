@@ -190,6 +190,9 @@ pub(super) struct Surface<'a, V: Lanes> {
     /// case, shaded with splatted constants), else one per lane.
     pub materials: [&'a Material; MAX_LANES],
     pub shared: bool,
+    /// Every lane's material has the same specular exponent (and so the same floor): the
+    /// lanes' powers are taken together, as for one shared material.
+    one_exponent: bool,
 }
 
 impl<'a, V: Lanes> Surface<'a, V> {
@@ -217,6 +220,7 @@ impl<'a, V: Lanes> Surface<'a, V> {
                 reflection: V::splat(m.reflection),
                 materials: [m; MAX_LANES],
                 shared,
+                one_exponent: true,
             };
         }
         let mut objects = [first as usize; MAX_LANES];
@@ -245,6 +249,8 @@ impl<'a, V: Lanes> Surface<'a, V> {
             diffuse: V3::from_fn(|k| materials[k].diffuse),
             specular: V3::from_fn(|k| materials[k].specular),
             reflection: V::from_fn(|k| materials[k].reflection),
+            one_exponent: (materials[1..V::N].iter())
+                .all(|m| m.exponent.to_bits() == materials[0].exponent.to_bits()),
             materials,
             shared,
         }
@@ -303,10 +309,12 @@ impl<'a, V: Lanes> Surface<'a, V> {
         self.ambient = texture::lanes(world, &ambient, &at, self.ambient);
     }
 
-    /// max(0, N·H)^exponent per lane (see `specular_power`).
+    /// max(0, N·H)^exponent per lane (see `specular_power`). The floor below which a power is
+    /// 0 is a function of the exponent alone (`sequence::scene::material`), so lanes of one
+    /// exponent take the first lane's material's.
     #[inline(always)]
     fn specular_power(&self, x: V) -> V {
-        if self.shared {
+        if self.one_exponent {
             return specular_power(x, self.materials[0]);
         }
         let x = x.array();
@@ -406,7 +414,7 @@ pub(super) fn local<V: Lanes>(
             at,
             (lit_at_all, None),
             (to_light, distance),
-            &i,
+            &Tints::new(s, &i),
             scale,
             &mut sum,
             rays,
@@ -427,7 +435,7 @@ pub(super) fn shine<V: Lanes>(
     at: &Here<V>,
     (lit, seen): (V::M, Option<V::M>),
     (to_light, distance): (V3<V>, V),
-    i: &Intensity,
+    tints: &Tints<V>,
     scale: Option<V>,
     sum: &mut V3<V>,
     rays: &mut u64,
@@ -460,7 +468,7 @@ pub(super) fn shine<V: Lanes>(
     };
     let open = facing.andnot(blocked);
     if open.any() {
-        let mut term = direct(s, i, at.normal, to_light, n_dot_l, at.dir);
+        let mut term = direct(s, tints, at.normal, to_light, n_dot_l, at.dir);
         if !world.clear.is_empty() {
             term = term * super::glass::transmittance(world, &shadow, distance, open);
         }
@@ -479,11 +487,28 @@ fn scaled<V: Lanes>(scale: Option<V>, v: V3<V>) -> V3<V> {
     }
 }
 
-/// Diffuse plus specular for an unblocked light with N·L > 0.
+/// A light's diffuse and specular intensities times the surface's colours, kd∘id and ks∘is:
+/// the same for every point of an area light, so its points' loop takes them made.
+pub(super) struct Tints<V: Lanes> {
+    diffuse: V3<V>,
+    specular: V3<V>,
+}
+
+impl<V: Lanes> Tints<V> {
+    #[inline(always)]
+    pub(super) fn new(s: &Surface<V>, i: &Intensity) -> Tints<V> {
+        Tints {
+            diffuse: s.diffuse * V3::splat(i.diffuse),
+            specular: s.specular * V3::splat(i.specular),
+        }
+    }
+}
+
+/// Diffuse plus specular for an unblocked light with N·L > 0: (kd∘id)·n_l + (ks∘is)·spec.
 #[inline(always)]
 fn direct<V: Lanes>(
     s: &Surface<V>,
-    i: &Intensity,
+    tints: &Tints<V>,
     n: V3<V>,
     l: V3<V>,
     n_dot_l: V,
@@ -495,8 +520,8 @@ fn direct<V: Lanes>(
     let x = n.dot(h);
     let x = V::select(x.lt(zero), zero, x);
     let x = V::select(x.gt(one), one, x);
-    let diffuse = s.diffuse * V3::splat(i.diffuse) * n_dot_l;
-    let specular = s.specular * V3::splat(i.specular) * s.specular_power(x);
+    let diffuse = tints.diffuse * n_dot_l;
+    let specular = tints.specular * s.specular_power(x);
     diffuse + specular
 }
 
