@@ -159,20 +159,38 @@ fn color_with<R: Round>(world: &World, texture: &Texture, at: &At) -> DVec3 {
         }
         f.taps = checker_taps(f.taps, at.r, *size);
     }
-    let mut sum = DVec3::ZERO;
-    for k in 0..f.taps {
+    let major = f.major / f64::from(f.taps);
+    let centre = |k: u32| {
         let step = (f64::from(2 * k + 1) - f64::from(f.taps)) / f64::from(f.taps);
-        let centre = snap(scene, at, p + f.major * step);
-        let tap = Tap {
-            p: centre,
-            offset: centre - p,
-            minor: f.minor,
-            major: f.major / f64::from(f.taps),
-        };
-        sum += match texture {
-            Texture::Checker { size, colors } => checker::<R>(*size, colors, &tap),
-            Texture::Image { image, scale } => image_color::<R>(scene, image, *scale, at, &tap),
-        };
+        snap(scene, at, p + f.major * step)
+    };
+    let mut sum = DVec3::ZERO;
+    match texture {
+        Texture::Checker { size, colors } => {
+            // Taps differ only in their centres: their boxes' half-widths are the same.
+            let tap = Tap {
+                p,
+                offset: DVec3::ZERO,
+                minor: f.minor,
+                major,
+            };
+            let half = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| tap.extent(a) / *size);
+            for k in 0..f.taps {
+                sum += checker::<R>(*size, colors, centre(k), &half);
+            }
+        }
+        Texture::Image { image, scale } => {
+            for k in 0..f.taps {
+                let c = centre(k);
+                let tap = Tap {
+                    p: c,
+                    offset: c - p,
+                    minor: f.minor,
+                    major,
+                };
+                sum += image_color::<R>(scene, image, *scale, at, &tap);
+            }
+        }
     }
     sum / f64::from(f.taps)
 }
@@ -316,16 +334,15 @@ impl Tap {
     }
 }
 
-/// The checker averaged over the tap's bounding box: the product of three square waves,
-/// averaged axis by axis (their product's average over a box is the product of their
-/// averages); colour weights (1 ± A)/2.
+/// The checker averaged over a tap's bounding box, centred on `p` with half-widths `half` in
+/// cells: the product of three square waves, averaged axis by axis (their product's average
+/// over a box is the product of their averages); colour weights (1 ± A)/2.
 #[inline(always)]
-fn checker<R: Round>(size: f64, colors: &[DVec3; 2], tap: &Tap) -> DVec3 {
-    let axis = [DVec3::X, DVec3::Y, DVec3::Z];
-    let p = tap.p.to_array();
+fn checker<R: Round>(size: f64, colors: &[DVec3; 2], p: DVec3, half: &[f64; 3]) -> DVec3 {
+    let p = p.to_array();
     let mut a = 1.0;
     for i in 0..3 {
-        a *= square_average_with::<R>(p[i] / size, tap.extent(axis[i]) / size);
+        a *= square_average_with::<R>(p[i] / size, half[i]);
     }
     colors[0] * (0.5 + 0.5 * a) + colors[1] * (0.5 - 0.5 * a)
 }
