@@ -292,8 +292,17 @@ impl<'a, V: Lanes> Surface<'a, V> {
             hit.v.array(),
         );
         let vec = |a: &[[f64; MAX_LANES]; 3], k: usize| DVec3::new(a[0][k], a[1][k], a[2][k]);
-        let at: [Option<At>; MAX_LANES] = std::array::from_fn(|k| {
-            (k < V::N && hits >> k & 1 == 1 && self.materials[k].textured()).then(|| At {
+        // Each textured lane's lookups, written into per-lane colours (only the packet's
+        // lanes: building a footprint record for all MAX_LANES cost more than the lookups'
+        // bookkeeping).
+        let mut colors = [[DVec3::ZERO; MAX_LANES]; 2];
+        let mut painted = [0u32; 2];
+        for k in 0..V::N {
+            let m = self.materials[k];
+            if hits >> k & 1 == 0 || !m.textured() {
+                continue;
+            }
+            let at = At {
                 p: vec(&p, k) + world.origin,
                 n: vec(&n, k),
                 d: vec(&d, k),
@@ -301,12 +310,17 @@ impl<'a, V: Lanes> Surface<'a, V> {
                 object: object[k] as usize,
                 prim: hit.prim[k],
                 bary: (u[k], v[k]),
-            })
-        });
-        let diffuse = std::array::from_fn(|k| self.materials[k].diffuse_map.as_ref());
-        let ambient = std::array::from_fn(|k| self.materials[k].ambient_map.as_ref());
-        self.diffuse = texture::lanes(world, &diffuse, &at, self.diffuse);
-        self.ambient = texture::lanes(world, &ambient, &at, self.ambient);
+            };
+            for (c, map) in [&m.diffuse_map, &m.ambient_map].into_iter().enumerate() {
+                if let Some(t) = map {
+                    colors[c][k] = texture::color(world, t, &at);
+                    painted[c] |= 1 << k;
+                }
+            }
+        }
+        let [diffuse, ambient] = colors;
+        self.diffuse = texture::lanes(painted[0], &diffuse, self.diffuse);
+        self.ambient = texture::lanes(painted[1], &ambient, self.ambient);
     }
 
     /// max(0, N·H)^exponent per lane (see `specular_power`). The floor below which a power is

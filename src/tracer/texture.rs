@@ -545,26 +545,17 @@ fn bilinear_with<R: Round>(level: &Level, u: f64, v: f64) -> DVec3 {
         + (t(i0, j1) * (1.0 - fx) + t(i1, j1) * fx) * fy
 }
 
-/// The colour of each lane whose `maps` entry is set, the others' `fallback`.
+/// `colors` on the lanes of `painted` (bit k for lane k), `fallback` on the others.
 #[inline(always)]
-pub(super) fn lanes<V: Lanes>(
-    world: &World,
-    maps: &[Option<&Texture>; MAX_LANES],
-    at: &[Option<At>; MAX_LANES],
-    fallback: V3<V>,
-) -> V3<V> {
-    let mut out = [DVec3::ZERO; MAX_LANES];
-    let mut any = 0u32;
-    for k in 0..V::N {
-        if let (Some(t), Some(at)) = (maps[k], &at[k]) {
-            out[k] = color(world, t, at);
-            any |= 1 << k;
-        }
-    }
-    if any == 0 {
+pub(super) fn lanes<V: Lanes>(painted: u32, colors: &[DVec3; MAX_LANES], fallback: V3<V>) -> V3<V> {
+    if painted == 0 {
         return fallback;
     }
-    V3::select(V::M::from_bits(any), V3::from_fn(|k| out[k]), fallback)
+    V3::select(
+        V::M::from_bits(painted),
+        V3::from_fn(|k| colors[k]),
+        fallback,
+    )
 }
 
 #[cfg(test)]
