@@ -101,11 +101,15 @@ pub(super) struct At {
 #[inline(never)]
 pub(super) fn color(world: &World, texture: &Texture, at: &At) -> DVec3 {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("sse4.1") {
-        // SAFETY: the CPU has SSE4.1.
-        return unsafe { color_sse41(world, texture, at) };
+    {
+        if std::is_x86_feature_detected!("sse4.1") {
+            // SAFETY: the CPU has SSE4.1.
+            return unsafe { color_sse41(world, texture, at) };
+        }
+        color_with::<Portable>(world, texture, at)
     }
-    color_with::<Portable>(world, texture, at)
+    #[cfg(not(target_arch = "x86_64"))]
+    color_with::<Native>(world, texture, at)
 }
 
 /// `color` compiled with SSE4.1, whose rounding instruction is the library's floor and ceil
