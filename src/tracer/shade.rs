@@ -462,32 +462,48 @@ pub(super) fn shine<V: Lanes>(
         return;
     }
     *rays += facing.count();
+    // The lanes `seen` would find nothing: each lane's answer is its own, so leaving them out
+    // of the packet changes no other lane's.
+    let test = match seen {
+        None => facing,
+        Some(seen) => facing.andnot(seen),
+    };
+    // The shadow ray (a normalisation) is made only where some lane traces it or glass
+    // filters the light along it: not when every facing lane's cone is open.
+    let shadow = if test.any() || !world.clear.is_empty() {
+        Some(shadow_rays(at, to_light))
+    } else {
+        None
+    };
+    let blocked = match &shadow {
+        Some(shadow) if test.any() => world.blockers().occluded(shadow, distance, test),
+        _ => V::M::none_set(),
+    };
+    let open = facing.andnot(blocked);
+    if open.any() {
+        let mut term = direct(s, tints, at.normal, to_light, n_dot_l, at.dir);
+        if let Some(shadow) = &shadow
+            && !world.clear.is_empty()
+        {
+            term = term * super::glass::transmittance(world, shadow, distance, open);
+        }
+        let term = scaled(scale, term);
+        *sum = V3::select(open, *sum + term, *sum);
+    }
+}
+
+/// Shadow rays from the lanes' surface points (lifted off a mesh where it needs) along the
+/// unit vectors `to_light`, normalised once more.
+#[inline(always)]
+fn shadow_rays<V: Lanes>(at: &Here<V>, to_light: V3<V>) -> Rays<V> {
     let towards = to_light.normalize();
-    let shadow = Rays {
+    Rays {
         origin: match at.lift {
             None => at.point,
             Some(l) => l.origin(at.point, towards),
         },
         dir: towards,
         leaving: at.object,
-    };
-    // The lanes `seen` would find nothing: each lane's answer is its own, so leaving them out
-    // of the packet changes no other lane's.
-    let blocked = match seen {
-        None => world.blockers().occluded(&shadow, distance, facing),
-        Some(seen) => match facing.andnot(seen) {
-            test if test.any() => world.blockers().occluded(&shadow, distance, test),
-            _ => V::M::none_set(),
-        },
-    };
-    let open = facing.andnot(blocked);
-    if open.any() {
-        let mut term = direct(s, tints, at.normal, to_light, n_dot_l, at.dir);
-        if !world.clear.is_empty() {
-            term = term * super::glass::transmittance(world, &shadow, distance, open);
-        }
-        let term = scaled(scale, term);
-        *sum = V3::select(open, *sum + term, *sum);
     }
 }
 
