@@ -11,9 +11,11 @@ use super::World;
 use super::accel::{Nearest, Rays};
 use super::mesh::NO_TRIANGLE;
 use super::shade::Lift;
+use super::triangle::cross;
 use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{Mesh, MeshShading, Placement, Shape};
 use glam::DVec3;
+use std::mem::MaybeUninit;
 
 /// What shading needs about the lanes that hit a triangle. The stations of `gouraud` and
 /// `constant` lanes (their placed corners and corner normals) are worked out only when
@@ -61,18 +63,24 @@ struct Gathered {
     constant: u32,
 }
 
+/// What the lanes' arithmetic reads of each mesh lane besides its t, u, v and hit point:
+/// x, y, z of the triangle's corners (rows 0–8) and of their vertex normals (9–17).
+const ROWS: usize = 18;
+
 /// `MeshLanes::of`'s per-lane work on the lanes in `bits`, from each lane's object, t, u, v
-/// and hit point x, y, z (`lanes`, one array each) and triangle. Scalar f64 code, compiled
-/// once for every kernel and kept out of the shading of scenes without meshes.
-#[inline(never)]
-fn gather(
+/// and hit point x, y, z (`lanes`, one array each) and triangle. The fetches are scalar; the
+/// arithmetic runs in f64 lanes (`V::F64`), the lanes on one object at a time, with the
+/// operations of the scalar definition (`tests::normals`, `lift_distance`) in their order, so every
+/// lane gets the same bits on every width.
+#[inline(always)]
+fn gather<V: Lanes>(
     world: &World,
     bits: u32,
     lanes: &[[f64; MAX_LANES]; 7],
     prim: &[u32; MAX_LANES],
     roundoff: f64,
 ) -> Gathered {
-    let [objects, t, u, v, px, py, pz] = lanes;
+    let [objects, _, u, v, ..] = lanes;
     // Filled in place and returned whole: built in locals, it was copied out (2.8 KB a call).
     let mut g = Gathered {
         at: [(0usize, NO_TRIANGLE, 0.0, 0.0); MAX_LANES],
@@ -80,38 +88,208 @@ fn gather(
         gouraud: 0,
         constant: 0,
     };
-    let at = &mut g.at;
     // Every lane's triangle (its vertex indices) first, then the lanes' vertices: no lane's
     // vertex fetches then wait on its own triangle's, and the fetches of different lanes
     // overlap (a fine mesh's hits often miss the cache).
-    let mut corners = [[0u32; 3]; MAX_LANES];
+    let mut tris = [[0u32; 3]; MAX_LANES];
+    let mut last = (usize::MAX, None);
     let mut rest = bits;
     while rest != 0 {
         let k = rest.trailing_zeros() as usize;
         rest &= rest - 1;
-        at[k] = (objects[k] as usize, prim[k], u[k], v[k]);
-        corners[k] = indices(world, at[k]);
+        g.at[k] = (objects[k] as usize, prim[k], u[k], v[k]);
+        tris[k] = mesh_of(world, g.at[k].0, &mut last).triangles[prim[k] as usize];
+    }
+    // The corners of every lane of a group of W::N that holds a mesh lane (0 on the others).
+    let group_of = |k: usize| u32::MAX >> (32 - V::F64::N) << (k / V::F64::N * V::F64::N);
+    let mut space = MaybeUninit::uninit();
+    let mut rows = Rows {
+        rows: &mut space,
+        written: 0,
+    };
+    let mut rest = bits;
+    while rest != 0 {
+        let mut fill = group_of(rest.trailing_zeros() as usize);
+        rest &= !fill;
+        while fill != 0 {
+            let k = fill.trailing_zeros() as usize;
+            fill &= fill - 1;
+            let mut row = [0.0; ROWS];
+            if bits >> k & 1 == 1 {
+                let m = mesh_of(world, g.at[k].0, &mut last);
+                for (i, &vertex) in tris[k].iter().enumerate() {
+                    let (q, n) = (m.positions[vertex as usize], m.normals[vertex as usize]);
+                    row[3 * i..3 * i + 3].copy_from_slice(&[q.x, q.y, q.z]);
+                    row[9 + 3 * i..12 + 3 * i].copy_from_slice(&[n.x, n.y, n.z]);
+                }
+            }
+            rows.set(k, row);
+        }
     }
     let mut rest = bits;
     while rest != 0 {
-        let k = rest.trailing_zeros() as usize;
-        rest &= rest - 1;
-        let p = DVec3::new(px[k], py[k], pz[k]);
-        let (geom, shade, shading) = normals(world, at[k], corners[k]);
-        let delta = lift_distance(p, t[k], roundoff);
-        for (i, x) in [geom.x, geom.y, geom.z, shade.x, shade.y, shade.z, delta]
-            .into_iter()
-            .enumerate()
-        {
-            g.out[i][k] = x;
-        }
+        let object = g.at[rest.trailing_zeros() as usize].0;
+        let group = on_object(&g.at, rest, object);
+        rest &= !group;
+        let (place, _, shading) = placed(world, object);
         match shading {
-            MeshShading::Gouraud => g.gouraud |= 1 << k,
-            MeshShading::Constant => g.constant |= 1 << k,
+            MeshShading::Gouraud => g.gouraud |= group,
+            MeshShading::Constant => g.constant |= group,
             _ => {}
+        }
+        let face = matches!(shading, MeshShading::Flat | MeshShading::Constant);
+        let mut from = 0;
+        while from < V::N {
+            let mask = group >> from & (u32::MAX >> (32 - V::F64::N));
+            if mask != 0 {
+                let part = Part {
+                    from,
+                    mask: <V::F64 as Lanes>::M::from_bits(mask),
+                };
+                lanes_of::<V::F64>(&place, face, &rows, lanes, part, roundoff, &mut g.out);
+            }
+            from += V::F64::N;
         }
     }
     g
+}
+
+/// The mesh of `object`, looked up again only when the object changes from the `last` one.
+#[inline(always)]
+fn mesh_of<'w>(world: &'w World, object: usize, last: &mut (usize, Option<&'w Mesh>)) -> &'w Mesh {
+    match *last {
+        (o, Some(m)) if o == object => m,
+        _ => {
+            let m = placed(world, object).1;
+            *last = (object, Some(m));
+            m
+        }
+    }
+}
+
+/// The lanes of `lanes` (bit k for lane k) whose hit is on `object`.
+#[inline(always)]
+fn on_object(at: &[(usize, u32, f64, f64); MAX_LANES], lanes: u32, object: usize) -> u32 {
+    let mut group = 0;
+    let mut rest = lanes;
+    while rest != 0 {
+        let k = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        group |= u32::from(at[k].0 == object) << k;
+    }
+    group
+}
+
+/// Per-lane values, `ROWS` rows of them, left unwritten on the lanes no group needs: zeroing
+/// them first cost more than the arithmetic (4.6 KB a packet). Only the array lives in the
+/// caller's frame (as `walk::Stack`'s): a struct that also held `written` was zeroed whole
+/// by the compiler.
+struct Rows<'a> {
+    rows: &'a mut MaybeUninit<[[f64; MAX_LANES]; ROWS]>,
+    /// Bit k: lane k of every row is written.
+    written: u32,
+}
+
+impl Rows<'_> {
+    /// Writes lane k of every row.
+    #[inline(always)]
+    fn set(&mut self, k: usize, values: [f64; ROWS]) {
+        assert!(k < MAX_LANES);
+        let rows = self.rows.as_mut_ptr().cast::<f64>();
+        for (r, x) in values.into_iter().enumerate() {
+            // SAFETY: row r < ROWS and lane k < MAX_LANES lie inside the arrays; a write
+            // through the pointer reads nothing.
+            unsafe { rows.add(r * MAX_LANES + k).write(x) };
+        }
+        self.written |= 1 << k;
+    }
+
+    /// Lanes `from..from + n` of row `r`, all of them written.
+    #[inline(always)]
+    fn row(&self, r: usize, from: usize, n: usize) -> &[f64] {
+        let want = (u32::MAX >> (32 - n)) << from;
+        assert!(r < ROWS && from + n <= MAX_LANES && self.written & want == want);
+        // SAFETY: in bounds (checked), and lanes from..from + n of every row were written by
+        // `set`.
+        unsafe {
+            let rows = self.rows.as_ptr().cast::<f64>();
+            std::slice::from_raw_parts(rows.add(r * MAX_LANES + from), n)
+        }
+    }
+
+    /// Lanes `from..from + W::N` of rows r, r + 1 and r + 2 (x, y, z).
+    #[inline(always)]
+    fn v3<W: Lanes>(&self, r: usize, from: usize) -> V3<W> {
+        V3 {
+            x: W::load(self.row(r, from, W::N)),
+            y: W::load(self.row(r + 1, from, W::N)),
+            z: W::load(self.row(r + 2, from, W::N)),
+        }
+    }
+}
+
+/// Lanes `from..from + W::N` of the per-lane arrays, of which `mask` are to be written.
+struct Part<W: Lanes> {
+    from: usize,
+    mask: W::M,
+}
+
+/// `normals` and `lift_distance` in the lanes `part` of one object's hits (placement `place`;
+/// `face`: shaded with the face normal), from their corners (`rows`) and their t, u, v and
+/// hit point (`lanes`): the geometric normal, shading normal and δ written into `out` on the
+/// masked lanes.
+#[inline(always)]
+fn lanes_of<W: Lanes>(
+    place: &Placement,
+    face: bool,
+    rows: &Rows<'_>,
+    lanes: &[[f64; MAX_LANES]; 7],
+    part: Part<W>,
+    roundoff: f64,
+    out: &mut [[f64; MAX_LANES]; 7],
+) {
+    let from = part.from;
+    let (q0, q1, q2) = (rows.v3::<W>(0, from), rows.v3(3, from), rows.v3(6, from));
+    let (n0, n1, n2) = (rows.v3::<W>(9, from), rows.v3(12, from), rows.v3(15, from));
+    let (t, u, v) = (
+        W::load(&lanes[1][from..]),
+        W::load(&lanes[2][from..]),
+        W::load(&lanes[3][from..]),
+    );
+    let one = W::splat(1.0);
+    let b0 = one - u - v;
+    let wound = placed_normal(place, cross(q1 - q0, q2 - q0));
+    let smooth = placed_normal(place, n0 * b0 + n1 * u + n2 * v);
+    // `smooth_or`: |s·s − 1| < 0.5, false for NaN and infinities.
+    let finite = (smooth.dot(smooth) - one).copysign(one).lt(W::splat(0.5));
+    let smooth = V3::select(finite, smooth, wound);
+    let geom = V3::select(wound.dot(smooth).lt(W::splat(0.0)), -wound, wound);
+    let shade = if face { geom } else { smooth };
+    let p = V3::<W>::load(&[lanes[4], lanes[5], lanes[6]], from);
+    let most =
+        p.x.copysign(one)
+            .max(p.y.copysign(one))
+            .max(p.z.copysign(one));
+    let delta = W::splat(64.0 * roundoff) * (most + t);
+    let values = [geom.x, geom.y, geom.z, shade.x, shade.y, shade.z, delta];
+    for (i, x) in values.into_iter().enumerate() {
+        let old = W::load(&out[i][from..]);
+        W::select(part.mask, x, old).store(&mut out[i][from..]);
+    }
+}
+
+/// `Placement::normal` in lanes: (R · (n / s)) normalised, as glam computes it (R's columns
+/// times n's components, summed x, y, z in order; 1/√(n·n) times each component).
+#[inline(always)]
+fn placed_normal<W: Lanes>(place: &Placement, n: V3<W>) -> V3<W> {
+    let s = place.scale;
+    let w = V3 {
+        x: n.x / W::splat(s.x),
+        y: n.y / W::splat(s.y),
+        z: n.z / W::splat(s.z),
+    };
+    let r = place.rotation;
+    (V3::splat(r.x_axis) * w.x + V3::splat(r.y_axis) * w.y + V3::splat(r.z_axis) * w.z).normalize()
 }
 
 impl<'w, V: Lanes> MeshLanes<'w, V> {
@@ -142,7 +320,10 @@ impl<'w, V: Lanes> MeshLanes<'w, V> {
             out,
             gouraud,
             constant,
-        } = gather(world, bits, &lanes, &hit.prim, roundoff::<V>());
+        } = V::outlined(
+            #[inline(always)]
+            || gather::<V>(world, bits, &lanes, &hit.prim, roundoff::<V>()),
+        );
         // Loads written out: a closure is compiled outside the kernel's target feature.
         Some(MeshLanes {
             world,
@@ -301,53 +482,6 @@ fn placed(world: &World, object: usize) -> (Placement, &Mesh, MeshShading) {
     (place, &scene.meshes[mesh], shading)
 }
 
-/// The vertex indices of one lane's hit triangle.
-#[inline(always)]
-fn indices(world: &World, (object, prim, _, _): (usize, u32, f64, f64)) -> [u32; 3] {
-    placed(world, object).1.triangles[prim as usize]
-}
-
-/// The geometric and shading normals of one lane that hit the triangle of `object` with vertex
-/// indices `tri` at barycentrics (u, v), and the object's shading model. Scalar f64 code,
-/// compiled once for every kernel (in `gather`).
-#[inline(always)]
-fn normals(
-    world: &World,
-    (object, _, u, v): (usize, u32, f64, f64),
-    tri: [u32; 3],
-) -> (DVec3, DVec3, MeshShading) {
-    let (place, m, shading) = placed(world, object);
-    let q = tri.map(|i| m.positions[i as usize]);
-    let n = tri.map(|i| m.normals[i as usize]);
-    let b = [1.0 - u - v, u, v];
-    let wound = place.normal((q[1] - q[0]).cross(q[2] - q[0]));
-    let smooth = smooth_or(&place, n[0] * b[0] + n[1] * b[1] + n[2] * b[2], wound);
-    // The vertex normals say which side is out (a file may wind its faces either way).
-    let geom = if wound.dot(smooth) < 0.0 {
-        -wound
-    } else {
-        wound
-    };
-    let shade = match shading {
-        MeshShading::Phong | MeshShading::Gouraud => smooth,
-        MeshShading::Flat | MeshShading::Constant => geom,
-    };
-    (geom, shade, shading)
-}
-
-/// The placed smooth normal of the blend `sum` of vertex normals; `wound` where that is not
-/// finite: opposed vertex normals that cancel to (0, 0, 0), or nearly, normalise to NaN or
-/// infinity (docs/spec/mesh.md).
-#[inline(always)]
-fn smooth_or(place: &Placement, sum: DVec3, wound: DVec3) -> DVec3 {
-    let smooth = place.normal(sum);
-    // A finite unit vector has s·s within rounding of 1; NaN and infinities fail the test.
-    match (smooth.dot(smooth) - 1.0).abs() < 0.5 {
-        true => smooth,
-        false => wound,
-    }
-}
-
 /// Corner `i` of one lane's triangle placed, or (`normal`) its vertex normal placed.
 #[inline(never)]
 fn corner(
@@ -367,7 +501,131 @@ fn corner(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lanes::F64x1;
     use glam::DMat3;
+
+    /// The scalar definition of a mesh lane's normals (docs/spec/mesh.md), which `lanes_of`
+    /// computes in lanes: the geometric and shading normals of a hit at barycentrics (u, v)
+    /// of the triangle with corners `q` and vertex normals `n` under `place`.
+    fn normals(
+        place: &Placement,
+        q: [DVec3; 3],
+        n: [DVec3; 3],
+        (u, v): (f64, f64),
+        face: bool,
+    ) -> (DVec3, DVec3) {
+        let b = [1.0 - u - v, u, v];
+        let wound = place.normal((q[1] - q[0]).cross(q[2] - q[0]));
+        let smooth = smooth_or(place, n[0] * b[0] + n[1] * b[1] + n[2] * b[2], wound);
+        // The vertex normals say which side is out (a file may wind its faces either way).
+        let geom = if wound.dot(smooth) < 0.0 {
+            -wound
+        } else {
+            wound
+        };
+        (geom, if face { geom } else { smooth })
+    }
+
+    /// The placed smooth normal of the blend `sum` of vertex normals; `wound` where that is
+    /// not finite: opposed vertex normals that cancel to (0, 0, 0), or nearly, normalise to
+    /// NaN or infinity.
+    fn smooth_or(place: &Placement, sum: DVec3, wound: DVec3) -> DVec3 {
+        let smooth = place.normal(sum);
+        match (smooth.dot(smooth) - 1.0).abs() < 0.5 {
+            true => smooth,
+            false => wound,
+        }
+    }
+
+    /// `lanes_of` gives the scalar definition's bits, δ included, on random triangles under
+    /// rotated, non-uniformly scaled placements, cancelling vertex normals among them.
+    #[test]
+    fn lane_normals_are_the_scalar_definition() {
+        let mut s = 3u64;
+        let mut rnd = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for case in 0..4000 {
+            let mut r = [0.0; 40];
+            r.iter_mut().for_each(|x| *x = rnd());
+            let mut at = 0;
+            let mut v3 = || {
+                at += 3;
+                DVec3::new(r[at - 3], r[at - 2], r[at - 1])
+            };
+            let place = Placement {
+                scale: DVec3::new(0.1, 1.0, 7.0) + v3().abs() * 3.0,
+                rotation: DMat3::from_euler(
+                    glam::EulerRot::XYZ,
+                    v3().x * 3.0,
+                    v3().y * 3.0,
+                    v3().z * 3.0,
+                ),
+                translate: v3() * 100.0,
+            };
+            let q = [v3(), v3() * 1e-3, v3() * 1e3];
+            let mut n = [v3().normalize(), v3().normalize(), v3().normalize()];
+            if case % 7 == 0 {
+                n[1] = -n[0];
+            }
+            let (u, v) = if case % 7 == 0 {
+                (0.5, 0.0)
+            } else {
+                (r[38].abs() * 0.5, r[39].abs() * 0.5)
+            };
+            let (t, p) = (r[37].abs() * 50.0, v3() * 10f64.powi(case % 9 - 4));
+            let face = case % 3 == 0;
+            let mut space = MaybeUninit::uninit();
+            let mut rows = Rows {
+                rows: &mut space,
+                written: 0,
+            };
+            let mut row = [0.0; ROWS];
+            for i in 0..3 {
+                row[3 * i..3 * i + 3].copy_from_slice(&q[i].to_array());
+                row[9 + 3 * i..12 + 3 * i].copy_from_slice(&n[i].to_array());
+            }
+            rows.set(0, row);
+            let mut lanes = [[0.0; MAX_LANES]; 7];
+            for (i, x) in [0.0, t, u, v, p.x, p.y, p.z].into_iter().enumerate() {
+                lanes[i][0] = x;
+            }
+            let mut out = [[0.0; MAX_LANES]; 7];
+            let part = Part::<F64x1> {
+                from: 0,
+                mask: true,
+            };
+            lanes_of(
+                &place,
+                face,
+                &rows,
+                &lanes,
+                part,
+                f64::EPSILON / 2.0,
+                &mut out,
+            );
+            let (geom, shade) = normals(&place, q, n, (u, v), face);
+            let want = [
+                geom.x,
+                geom.y,
+                geom.z,
+                shade.x,
+                shade.y,
+                shade.z,
+                lift_distance(p, t, f64::EPSILON / 2.0),
+            ];
+            for i in 0..7 {
+                assert_eq!(
+                    out[i][0].to_bits(),
+                    want[i].to_bits(),
+                    "case {case}, value {i}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn cancelled_vertex_normals_fall_back_to_the_wound_normal() {
