@@ -49,6 +49,7 @@ pub(crate) fn framing_warnings(seq: &Sequence) -> Vec<String> {
     let aspect = f64::from(seq.settings.height) / f64::from(seq.settings.width);
     let start = t.pose_of(t.first_frame()).position;
     let mut out = Vec::new();
+    let mut unseen = Vec::new();
     for (i, o) in seq.scene.objects.iter().enumerate() {
         let Shape::Mesh { mesh, place, .. } = o.shape else {
             continue;
@@ -70,12 +71,32 @@ pub(crate) fn framing_warnings(seq: &Sequence) -> Vec<String> {
             ));
         }
         if !cameras.iter().any(|c| may_see(c, aspect, lo, hi)) {
-            out.push(format!(
-                "{what} is never in view: no frame's camera looks towards its bounds; aim a key at it with `look_at: {{ object: NAME }}` or check its translate"
-            ));
+            unseen.push(what);
         }
     }
+    out.extend(never_in_view(unseen));
     out
+}
+
+/// Meshes past this many that are never in view are counted in one warning, not named each
+/// in one of their own (a forest of placements half behind the camera made thousands of lines).
+const UNSEEN_NAMED: usize = 3;
+
+/// The warnings for the meshes `unseen` (each as `objects[i] (…)`): one each, or one for all
+/// that names the first few and counts the rest.
+fn never_in_view(unseen: Vec<String>) -> Vec<String> {
+    let why = "no frame's camera looks towards its bounds; aim a key at it with `look_at: { object: NAME }` or check its translate";
+    if unseen.len() <= UNSEEN_NAMED {
+        return (unseen.into_iter())
+            .map(|what| format!("{what} is never in view: {why}"))
+            .collect();
+    }
+    let rest = unseen.len() - UNSEEN_NAMED;
+    vec![format!(
+        "{} meshes are never in view ({} and {rest} more): {why}",
+        unseen.len(),
+        unseen[..UNSEEN_NAMED].join(", ")
+    )]
 }
 
 /// `v` to 3 significant digits, for sizes in messages.
@@ -242,5 +263,25 @@ pub(crate) fn report(
             format!("frames {a}-{b}")
         };
         warnings.push(format!("{frames}: {what}"));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn many_unseen_meshes_make_one_warning() {
+        let named = |n: usize| (0..n).map(|i| format!("objects[{i}] (m.ply)")).collect();
+        let few = never_in_view(named(3));
+        assert_eq!(few.len(), 3);
+        assert!(few[2].starts_with("objects[2] (m.ply) is never in view: no frame's camera"));
+        let many = never_in_view(named(2600));
+        assert_eq!(many.len(), 1);
+        assert!(
+            many[0].starts_with("2600 meshes are never in view (objects[0] (m.ply), objects[1] (m.ply), objects[2] (m.ply) and 2597 more): no frame's camera"),
+            "{}",
+            many[0]
+        );
     }
 }
