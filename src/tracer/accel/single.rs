@@ -130,7 +130,8 @@ pub(crate) fn walk<V: Lanes, S: Visit<V>, R: Real>(
     }
 }
 
-/// Pushes the children of node `at` the ray enters before `limit`, farthest first.
+/// Pushes the children of node `at` the ray enters before `limit`, farthest first. One or
+/// two children (most nodes a single ray opens) are pushed without the general sort.
 #[inline(always)]
 fn push_children<R: Real>(
     ray: &Ray1<R>,
@@ -140,6 +141,22 @@ fn push_children<R: Real>(
     stack: &mut Stack<(u32, u32, R)>,
 ) {
     let (hit, near) = ray.children(&nodes[at as usize], limit);
+    if hit == 0 {
+        return;
+    }
+    let (a, b) = (hit.trailing_zeros(), 31 - hit.leading_zeros());
+    if hit & (hit - 1) == 0 {
+        return stack.push((at, a, near[a as usize]));
+    }
+    if hit == 1 << a | 1 << b {
+        // The sort's order: the nearer last, the lower slot last between equals.
+        let (far, close) = match near[a as usize] < near[b as usize] {
+            true => (b, a),
+            false => (a, b),
+        };
+        stack.push((at, far, near[far as usize]));
+        return stack.push((at, close, near[close as usize]));
+    }
     let mut found = [(R::ZERO, 0u32); WIDTH];
     let mut n = 0;
     let mut bits = hit;
