@@ -70,8 +70,8 @@ const ROWS: usize = 18;
 /// `MeshLanes::of`'s per-lane work on the lanes in `bits`, from each lane's object, t, u, v
 /// and hit point x, y, z (`lanes`, one array each) and triangle. The fetches are scalar; the
 /// arithmetic runs in f64 lanes (`V::F64`), the lanes on one object at a time, with the
-/// operations of the scalar definition (`tests::normals`, `lift_distance`) in their order, so every
-/// lane gets the same bits on every width.
+/// operations of the scalar definition (`tests::normals`, `lift_distance`) in their order,
+/// so every lane gets the same bits on every width.
 #[inline(always)]
 fn gather<V: Lanes>(
     world: &World,
@@ -100,8 +100,9 @@ fn gather<V: Lanes>(
         g.at[k] = (objects[k] as usize, prim[k], u[k], v[k]);
         tris[k] = mesh_of(world, g.at[k].0, &mut last).triangles[prim[k] as usize];
     }
-    // The corners of every lane of a group of W::N that holds a mesh lane (0 on the others).
-    let group_of = |k: usize| u32::MAX >> (32 - V::F64::N) << (k / V::F64::N * V::F64::N);
+    // The corners of every lane of a group of V::F64::N that holds a mesh lane (0 on the
+    // lanes of the group without one).
+    let group_of = |k: usize| low_bits(V::F64::N) << (k / V::F64::N * V::F64::N);
     let mut space = MaybeUninit::uninit();
     let mut rows = Rows {
         rows: &mut space,
@@ -140,7 +141,7 @@ fn gather<V: Lanes>(
         let face = matches!(shading, MeshShading::Flat | MeshShading::Constant);
         let mut from = 0;
         while from < V::N {
-            let mask = group >> from & (u32::MAX >> (32 - V::F64::N));
+            let mask = group >> from & low_bits(V::F64::N);
             if mask != 0 {
                 let part = Part {
                     from,
@@ -152,6 +153,12 @@ fn gather<V: Lanes>(
         }
     }
     g
+}
+
+/// Bits 0..n set (n from 1 to 32).
+#[inline(always)]
+fn low_bits(n: usize) -> u32 {
+    u32::MAX >> (32 - n)
 }
 
 /// The mesh of `object`, looked up again only when the object changes from the `last` one.
@@ -207,7 +214,7 @@ impl Rows<'_> {
     /// Lanes `from..from + n` of row `r`, all of them written.
     #[inline(always)]
     fn row(&self, r: usize, from: usize, n: usize) -> &[f64] {
-        let want = (u32::MAX >> (32 - n)) << from;
+        let want = low_bits(n) << from;
         assert!(r < ROWS && from + n <= MAX_LANES && self.written & want == want);
         // SAFETY: in bounds (checked), and lanes from..from + n of every row were written by
         // `set`.
@@ -321,6 +328,8 @@ impl<'w, V: Lanes> MeshLanes<'w, V> {
             gouraud,
             constant,
         } = V::outlined(
+            // Out of line: compiled once per lane type, and nothing of it in the shading of
+            // scenes without meshes.
             #[inline(always)]
             || gather::<V>(world, bits, &lanes, &hit.prim, roundoff::<V>()),
         );
