@@ -241,7 +241,7 @@ struct Part<W: Lanes> {
     mask: W::M,
 }
 
-/// `normals` and `lift_distance` in the lanes `part` of one object's hits (placement `place`;
+/// `tests::normals` and `lift_distance` in the lanes `part` of one object's hits (placement `place`;
 /// `face`: shaded with the face normal), from their corners (`rows`) and their t, u, v and
 /// hit point (`lanes`): the geometric normal, shading normal and δ written into `out` on the
 /// masked lanes.
@@ -272,7 +272,12 @@ fn lanes_of<W: Lanes>(
     let smooth = V3::select(finite, smooth, wound);
     let geom = V3::select(wound.dot(smooth).lt(W::splat(0.0)), -wound, wound);
     let shade = if face { geom } else { smooth };
-    let p = V3::<W>::load(&[lanes[4], lanes[5], lanes[6]], from);
+    // Loaded where they lie: `V3::load` takes one array of three, which cost a copy of these.
+    let p = V3 {
+        x: W::load(&lanes[4][from..]),
+        y: W::load(&lanes[5][from..]),
+        z: W::load(&lanes[6][from..]),
+    };
     let most =
         p.x.copysign(one)
             .max(p.y.copysign(one))
