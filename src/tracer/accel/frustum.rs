@@ -18,6 +18,7 @@
 //! from its least entry alone (`before`), since every lane's exit is at most its limit.
 
 use super::Slabs;
+use super::four::{Four, Four32, Four64};
 use super::walk::fold;
 use super::wide::{Node, WIDTH};
 use crate::lanes::{Lanes, MAX_LANES, Mask};
@@ -26,8 +27,9 @@ use std::ops::{Mul, Sub};
 /// The float the lanes compute in: f32 or f64.
 pub(crate) trait Real: Copy + PartialOrd + Sub<Output = Self> + Mul<Output = Self> {
     const ZERO: Self;
+    /// A node's 4 children side by side in this precision.
+    type X4: Four<R = Self>;
     fn of(x: f64) -> Self;
-    fn of_f32(x: f32) -> Self;
     fn wide(self) -> f64;
     /// The lanes of `v` (exactly: `v` holds values of this precision).
     fn lanes<V: Lanes>(v: V) -> [Self; MAX_LANES];
@@ -43,13 +45,10 @@ pub(crate) trait Real: Copy + PartialOrd + Sub<Output = Self> + Mul<Output = Sel
 
 impl Real for f32 {
     const ZERO: f32 = 0.0;
+    type X4 = Four32;
     #[inline(always)]
     fn of(x: f64) -> f32 {
         x as f32
-    }
-    #[inline(always)]
-    fn of_f32(x: f32) -> f32 {
-        x
     }
     #[inline(always)]
     fn wide(self) -> f64 {
@@ -65,13 +64,10 @@ impl Real for f32 {
 
 impl Real for f64 {
     const ZERO: f64 = 0.0;
+    type X4 = Four64;
     #[inline(always)]
     fn of(x: f64) -> f64 {
         x
-    }
-    #[inline(always)]
-    fn of_f32(x: f32) -> f64 {
-        f64::from(x)
     }
     #[inline(always)]
     fn wide(self) -> f64 {
@@ -142,26 +138,20 @@ impl<R: Real> Frustum<R> {
     /// the lanes' limits), and each one's least entry distance.
     #[inline(always)]
     pub(crate) fn children(&self, node: &Node, limit: R) -> (u32, [R; WIDTH]) {
-        let mut near = [R::ZERO; WIDTH];
-        let mut far = [limit; WIDTH];
+        let mut near = R::X4::splat(R::ZERO);
+        let mut far = R::X4::splat(limit);
         for axis in 0..3 {
             let (entry, exit) = match self.backwards[axis] {
                 false => (&node.lo[axis], &node.hi[axis]),
                 true => (&node.hi[axis], &node.lo[axis]),
             };
             let (o, i) = (self.origin[axis], self.inv[axis]);
-            for c in 0..WIDTH {
-                near[c] = near[c].max(corners(R::of_f32(entry[c]), o, i, R::min));
-                far[c] = far[c].min(corners(R::of_f32(exit[c]), o, i, R::max));
-            }
+            near = near.max(corners(R::X4::load(entry), o, i, R::X4::min));
+            far = far.min(corners(R::X4::load(exit), o, i, R::X4::max));
         }
-        let mut hit = 0u32;
-        for c in 0..node.kids as usize {
-            if near[c] * self.less <= far[c] * self.more {
-                hit |= 1 << c;
-            }
-        }
-        (hit, near)
+        let (less, more) = (R::X4::splat(self.less), R::X4::splat(self.more));
+        let hit = near.mul(less).le(far.mul(more));
+        (hit & ((1 << node.kids) - 1), near.array())
     }
 
     /// Whether a child whose least entry is `near` may still be entered at or before
@@ -173,11 +163,17 @@ impl<R: Real> Frustum<R> {
 }
 
 /// The least (`pick` = min) or greatest (max) of fl(fl(p − o)·i) over the corners of
-/// [o₀, o₁] × [i₀, i₁].
+/// [o₀, o₁] × [i₀, i₁], for the 4 children's planes `p` at once.
 #[inline(always)]
-fn corners<R: Real>(p: R, (o0, o1): (R, R), (i0, i1): (R, R), pick: fn(R, R) -> R) -> R {
-    let (a, b) = (p - o1, p - o0);
-    pick(pick(a * i0, a * i1), pick(b * i0, b * i1))
+fn corners<X: Four>(
+    p: X,
+    (o0, o1): (X::R, X::R),
+    (i0, i1): (X::R, X::R),
+    pick: fn(X, X) -> X,
+) -> X {
+    let (i0, i1) = (X::splat(i0), X::splat(i1));
+    let (a, b) = (p.sub(X::splat(o1)), p.sub(X::splat(o0)));
+    pick(pick(a.mul(i0), a.mul(i1)), pick(b.mul(i0), b.mul(i1)))
 }
 
 /// The least and greatest value of `v` over `lanes` (at least one).

@@ -19,6 +19,7 @@ use std::ops::Range;
 use std::sync::Arc;
 
 mod build;
+mod four;
 pub(crate) mod frustum;
 mod single;
 mod slabs;

@@ -12,6 +12,7 @@
 //! a limit that shrank meanwhile: that entry is the one the lane's test compares.
 
 use super::Slabs;
+use super::four::Four;
 use super::frustum::Real;
 use super::walk::{Stack, Visit, farthest_first};
 use super::wide::{Node, WIDTH};
@@ -65,24 +66,23 @@ impl<R: Real> Ray1<R> {
     /// Which children of `node` the ray enters at or before `limit`, and each one's entry.
     #[inline(always)]
     fn children(&self, node: &Node, limit: R) -> (u32, [R; WIDTH]) {
-        let mut near = [R::ZERO; WIDTH];
-        let mut far = [limit; WIDTH];
+        let mut near = R::X4::splat(R::ZERO);
+        let mut far = R::X4::splat(limit);
         for axis in 0..3 {
             let (entry, exit) = match self.backwards[axis] {
                 false => (&node.lo[axis], &node.hi[axis]),
                 true => (&node.hi[axis], &node.lo[axis]),
             };
-            let (o, i) = (self.origin[axis], self.inv[axis]);
-            for c in 0..WIDTH {
-                near[c] = near[c].max((R::of_f32(entry[c]) - o) * i);
-                far[c] = far[c].min((R::of_f32(exit[c]) - o) * i);
-            }
+            let (o, i) = (
+                R::X4::splat(self.origin[axis]),
+                R::X4::splat(self.inv[axis]),
+            );
+            near = near.max(R::X4::load(entry).sub(o).mul(i));
+            far = far.min(R::X4::load(exit).sub(o).mul(i));
         }
-        let mut hit = 0u32;
-        for c in 0..WIDTH {
-            hit |= u32::from(near[c] * self.less <= far[c] * self.more) << c;
-        }
-        (hit & ((1 << node.kids) - 1), near)
+        let (less, more) = (R::X4::splat(self.less), R::X4::splat(self.more));
+        let hit = near.mul(less).le(far.mul(more));
+        (hit & ((1 << node.kids) - 1), near.array())
     }
 
     /// Whether a box entered at `near` still starts at or before `limit`.
