@@ -86,6 +86,11 @@ pub trait Lanes:
     /// where an f32 kernel needs f64 arithmetic per lane (an area light's points), it runs in
     /// these, `N / F64::N` groups at a time.
     type F64: Lanes;
+    /// Half the lanes: a `Pair`'s register type; for any other type, the type itself.
+    type Half: Lanes<One = Self::One>;
+    /// Whether this type is two `Half`s side by side (a mesh leaf whose lanes all lie in one
+    /// half tests that half alone).
+    const HALVES: bool;
     /// A magnitude whose reciprocal is finite in this precision: it stands in for a zero
     /// direction component in the slab test.
     const TINY: f64;
@@ -110,6 +115,10 @@ pub trait Lanes:
     fn select(m: Self::M, a: Self, b: Self) -> Self;
     fn min(self, o: Self) -> Self;
     fn max(self, o: Self) -> Self;
+    /// Half `i` of the lanes (0: lanes `0..N/2`, 1: the rest); without halves, the lanes.
+    fn half(self, i: usize) -> Self::Half;
+    /// These lanes with half `i` replaced by `h`; without halves, `h`.
+    fn with_half(self, i: usize, h: Self::Half) -> Self;
     /// The lanes in `[..N]` of an array.
     #[inline(always)]
     fn array(self) -> [f64; MAX_LANES] {
@@ -223,6 +232,8 @@ impl<L: Lanes> Lanes for Pair<L> {
     type M = PairMask<L::M>;
     type One = L::One;
     type F64 = Pair<L::F64>;
+    type Half = L;
+    const HALVES: bool = true;
     const TINY: f64 = L::TINY;
     const BOX_SLACK: f64 = L::BOX_SLACK;
     #[inline(always)]
@@ -278,6 +289,18 @@ impl<L: Lanes> Lanes for Pair<L> {
     #[inline(always)]
     fn max(self, o: Self) -> Self {
         Pair(self.0.max(o.0), self.1.max(o.1))
+    }
+    #[inline(always)]
+    fn half(self, i: usize) -> L {
+        if i == 0 { self.0 } else { self.1 }
+    }
+    #[inline(always)]
+    fn with_half(self, i: usize, h: L) -> Self {
+        if i == 0 {
+            Pair(h, self.1)
+        } else {
+            Pair(self.0, h)
+        }
     }
     #[inline(always)]
     fn outlined<R>(f: impl FnOnce() -> R) -> R {
@@ -367,8 +390,18 @@ macro_rules! scalar_lanes {
             type M = bool;
             type One = $t;
             type F64 = F64x1;
+            type Half = $t;
+            const HALVES: bool = false;
             const TINY: f64 = $tiny;
             const BOX_SLACK: f64 = $slack;
+            #[inline(always)]
+            fn half(self, _: usize) -> $t {
+                self
+            }
+            #[inline(always)]
+            fn with_half(self, _: usize, h: $t) -> $t {
+                h
+            }
             #[inline(always)]
             fn splat(x: f64) -> Self {
                 $t(x as $f)

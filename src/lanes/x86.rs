@@ -126,8 +126,18 @@ macro_rules! x86_lanes {
             type M = $m;
             type One = $one;
             type F64 = $wide;
+            type Half = $t;
+            const HALVES: bool = false;
             const TINY: f64 = $tiny;
             const BOX_SLACK: f64 = $slack;
+            #[inline(always)]
+            fn half(self, _: usize) -> $t {
+                self
+            }
+            #[inline(always)]
+            fn with_half(self, _: usize, h: $t) -> $t {
+                h
+            }
             #[inline(always)]
             fn splat(x: f64) -> Self {
                 let $sx = x;

@@ -272,30 +272,35 @@ impl<V: Lanes, T: Stored> Visit<V> for NearestVisit<'_, V, T> {
 
     #[inline(always)]
     fn leaf(&mut self, _: &Slabs<V>, first: usize, count: usize, enter: V::M) {
+        let tris = &self.tris[first..first + count];
+        let (dir, from, object) = (self.rays.dir, self.from, self.object);
+        let Some(i) = one_half::<V>(enter) else {
+            return nearest_leaf(tris, object, dir, from, enter, self.best);
+        };
         let best = &mut *self.best;
-        for tri in &self.tris[first..first + count] {
-            let (hit, t, w) = hit(tri, self.rays, self.from, enter);
-            if !hit.any() {
-                continue;
-            }
-            let mut better = hit.and(t.lt(best.t));
-            let tie = hit.and(t.eq(best.t));
-            if tie.any() {
-                better = better.or(ties_won(tie, self.object, tri.id(), best));
-            }
-            if better.any() {
-                let (u, v) = barycentrics(w);
-                best.t = V::select(better, t, best.t);
-                best.object = V::select(better, V::splat(f64::from(self.object)), best.object);
-                best.u = V::select(better, u, best.u);
-                best.v = V::select(better, v, best.v);
-                let mut bits = better.bits();
-                while bits != 0 {
-                    best.prim[bits.trailing_zeros() as usize] = tri.id();
-                    bits &= bits - 1;
-                }
-            }
-        }
+        let n = V::N / 2;
+        let mut half = Best {
+            t: best.t.half(i),
+            object: best.object.half(i),
+            u: best.u.half(i),
+            v: best.v.half(i),
+            prim: [NO_TRIANGLE; MAX_LANES],
+        };
+        half.prim[..n].copy_from_slice(&best.prim[i * n..i * n + n]);
+        let enter = <V::Half as Lanes>::M::from_bits(enter.bits() >> (i * n));
+        nearest_leaf(
+            tris,
+            object,
+            halves(dir, i),
+            half_from(from, i),
+            enter,
+            &mut half,
+        );
+        best.t = best.t.with_half(i, half.t);
+        best.object = best.object.with_half(i, half.object);
+        best.u = best.u.with_half(i, half.u);
+        best.v = best.v.with_half(i, half.v);
+        best.prim[i * n..i * n + n].copy_from_slice(&half.prim[..n]);
     }
 
     /// `leaf` for lane `k` alone, in `V::One`: the same operations on the same values.
@@ -343,16 +348,18 @@ impl<V: Lanes, T: Stored> Visit<V> for AnyVisit<'_, V, T> {
 
     #[inline(always)]
     fn leaf(&mut self, _: &Slabs<V>, first: usize, count: usize, enter: V::M) {
-        let mut enter = enter;
-        for tri in &self.tris[first..first + count] {
-            let (hit, t, _) = hit(tri, self.rays, self.from, enter);
-            let b = hit.and(t.lt(self.max_t));
-            self.blocked = self.blocked.or(b);
-            enter = enter.andnot(b);
-            if !enter.any() {
-                break;
-            }
-        }
+        let tris = &self.tris[first..first + count];
+        let (dir, from) = (self.rays.dir, self.from);
+        let Some(i) = one_half::<V>(enter) else {
+            let blocked = blocked_leaf(tris, dir, from, self.max_t, enter);
+            self.blocked = self.blocked.or(blocked);
+            return;
+        };
+        let n = V::N / 2;
+        let enter = <V::Half as Lanes>::M::from_bits(enter.bits() >> (i * n));
+        let max_t = self.max_t.half(i);
+        let blocked = blocked_leaf(tris, halves(dir, i), half_from(from, i), max_t, enter);
+        self.blocked = self.blocked.or(V::M::from_bits(blocked.bits() << (i * n)));
     }
 
     /// `leaf` for lane `k` alone, in `V::One`.
@@ -418,16 +425,115 @@ fn lane_of<V: Lanes>(v: V, k: usize) -> V::One {
     }
 }
 
-/// `triangle_hit` of one stored triangle for the packet in mesh coordinates.
+/// `triangle_hit` of one stored triangle for lanes in mesh coordinates.
 #[inline(always)]
 fn hit<V: Lanes, T: Stored>(
     tri: &T,
-    rays: &Rays<V>,
+    dir: V3<V>,
     (from, skipped): (V3<V>, Option<V>),
     enter: V::M,
 ) -> (V::M, V, [V; 3]) {
     let (v, n) = tri.lanes();
-    triangle_hit(v, n, from, rays.dir, skipped, enter)
+    triangle_hit(v, n, from, dir, skipped, enter)
+}
+
+/// The nearest hits among `tris` (of mesh `object`) of the lanes `enter`, into `best`.
+#[inline(always)]
+fn nearest_leaf<V: Lanes, T: Stored>(
+    tris: &[T],
+    object: u32,
+    dir: V3<V>,
+    from: (V3<V>, Option<V>),
+    enter: V::M,
+    best: &mut Best<V>,
+) {
+    for tri in tris {
+        let (hit, t, w) = hit(tri, dir, from, enter);
+        if !hit.any() {
+            continue;
+        }
+        let mut better = hit.and(t.lt(best.t));
+        let tie = hit.and(t.eq(best.t));
+        if tie.any() {
+            better = better.or(ties_won(tie, object, tri.id(), best));
+        }
+        if better.any() {
+            let (u, v) = barycentrics(w);
+            best.t = V::select(better, t, best.t);
+            best.object = V::select(better, V::splat(f64::from(object)), best.object);
+            best.u = V::select(better, u, best.u);
+            best.v = V::select(better, v, best.v);
+            let mut bits = better.bits();
+            while bits != 0 {
+                best.prim[bits.trailing_zeros() as usize] = tri.id();
+                bits &= bits - 1;
+            }
+        }
+    }
+}
+
+/// The lanes of `enter` that meet one of `tris` strictly before `max_t`.
+#[inline(always)]
+fn blocked_leaf<V: Lanes, T: Stored>(
+    tris: &[T],
+    dir: V3<V>,
+    from: (V3<V>, Option<V>),
+    max_t: V,
+    enter: V::M,
+) -> V::M {
+    let (mut enter, mut blocked) = (enter, V::M::none_set());
+    for tri in tris {
+        let (hit, t, _) = hit(tri, dir, from, enter);
+        let b = hit.and(t.lt(max_t));
+        blocked = blocked.or(b);
+        enter = enter.andnot(b);
+        if !enter.any() {
+            break;
+        }
+    }
+    blocked
+}
+
+/// The half of a pair of registers that holds every lane of `lanes`, if one does: a leaf
+/// entered by those lanes alone is tested in that half (the same operations on the same
+/// values, lane by lane), half the work. (Terrains and small meshes: a leaf is entered by a
+/// few neighbouring rays of a packet.)
+#[inline(always)]
+fn one_half<V: Lanes>(lanes: V::M) -> Option<usize> {
+    if !V::HALVES {
+        return None;
+    }
+    let (bits, n) = (lanes.bits(), V::N / 2);
+    match (bits & ((1 << n) - 1) == 0, bits >> n == 0) {
+        (false, true) => Some(0),
+        (true, false) => Some(1),
+        _ => None,
+    }
+}
+
+/// Half `i` of each component.
+#[inline(always)]
+fn halves<V: Lanes>(v: V3<V>, i: usize) -> V3<V::Half> {
+    V3 {
+        x: v.x.half(i),
+        y: v.y.half(i),
+        z: v.z.half(i),
+    }
+}
+
+/// Half `i` of where the triangle tests start.
+#[inline(always)]
+fn half_from<V: Lanes>(
+    (from, skipped): (V3<V>, Option<V>),
+    i: usize,
+) -> (V3<V::Half>, Option<V::Half>) {
+    // Not `Option::map`: its closure may be compiled outside the kernel's target feature.
+    #[allow(clippy::manual_map)]
+    let skipped = match skipped {
+        Some(t) => Some(t.half(i)),
+        None => None,
+    };
+    (halves(from, i), skipped)
 }
 
 /// The lanes of `tie` (same t as the best so far) where triangle `id` of `object` comes first:

@@ -384,9 +384,15 @@ impl Geometry {
             self.walk(rays, &mut search);
         }
         if !self.meshes.is_empty() && search.open.any() {
-            search.open = search
-                .open
-                .andnot(self.mesh_blocked(rays, max_t, search.open));
+            // Out of line on a copy of the rays, as in `nearest`: inlined, the mesh walk's
+            // code changed how the spheres' tests above were compiled (the talk's shadow
+            // rays took 0.7% more instructions when a mesh leaf grew).
+            let (rays, open) = (*rays, search.open);
+            let blocked = V::outlined(
+                #[inline(always)]
+                move || self.mesh_blocked(&rays, max_t, open),
+            );
+            search.open = search.open.andnot(blocked);
         }
         active.andnot(search.open)
     }
