@@ -1,9 +1,10 @@
 //! A wide node's 4 children side by side: the box tests of one ray (`single`) and of a
-//! packet's bounds (`frustum`) run on all 4 at once, f32 in an SSE register (x86-64's
-//! baseline, so every kernel has it). Each operation is the scalar one it replaces, lane by lane:
-//! `sub`, `mul`, `min` (a < b ? a : b, as `Real::min`) and `max` (a > b ? a : b), the f32
-//! planes widened exactly in f64. Written out as loops, LLVM kept them scalar (a tenth of a
-//! single ray's instructions were the box test's).
+//! packet's bounds (`frustum`) run on all 4 at once. Each operation is the scalar one it
+//! replaces, lane by lane: `sub`, `mul`, `min` (a < b ? a : b, as `Real::min`), `max`
+//! (a > b ? a : b) and ≤, the f32 planes widened exactly in f64. Written as loops over the
+//! children, the f32 tests stayed scalar (a tenth of a single ray's instructions were its box
+//! tests), so f32 runs in an SSE register (x86-64's baseline, so every kernel has it); the
+//! f64 loops LLVM turns into one 256-bit register by itself, so f64 stays a loop (`Plain`).
 
 use super::wide::WIDTH;
 
@@ -31,9 +32,9 @@ mod sse {
     #[derive(Clone, Copy)]
     pub(crate) struct Four32(__m128);
 
-    // SAFETY (every `unsafe` below): SSE and SSE2 are part of x86-64, so these intrinsics
-    // run on any CPU this binary runs on; loads and stores go through references to
-    // `[f32; 4]` or `[f64; 4]`, which are in bounds.
+    // SAFETY (every `unsafe` below): SSE is part of x86-64, so these intrinsics run on any
+    // CPU this binary runs on; loads and stores go through references to `[f32; 4]`, which
+    // are in bounds.
     impl Four for Four32 {
         type R = f32;
         #[inline(always)]
@@ -76,9 +77,8 @@ mod sse {
 #[cfg(target_arch = "x86_64")]
 pub(crate) use sse::Four32;
 
-/// Plain arrays with the same lane-by-lane definitions: f64 everywhere (under the AVX2 and
-/// AVX-512 kernels LLVM turns these loops into one 256-bit register, where SSE2's two
-/// 128-bit ones cost 10% more instructions on f64 mesh frames), f32 off x86-64.
+/// Plain arrays with the same lane-by-lane definitions: f64 everywhere (a pair of SSE2
+/// registers in their place cost 10% more instructions on f64 mesh frames), f32 off x86-64.
 mod plain {
     use super::{Four, WIDTH};
 
