@@ -464,6 +464,28 @@ macro_rules! scalar_lanes {
 scalar_lanes!(F64x1, f64, 1e-300, 0.0);
 scalar_lanes!(F32x1, f32, 1e-30, 1.0 / 65536.0);
 
+/// Asks the memory for the first and the last cache line of `items` ahead of their use: a
+/// hint, which changes no result. A walk that will test a node's children or a leaf's
+/// triangles soon then issues their loads together, instead of one miss after another. The
+/// lines between (a leaf's middle triangles) are not asked for: asking for every line cost
+/// more instructions and saved no measured time.
+#[inline(always)]
+pub fn fetch<T>(items: &[T]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let start = items.as_ptr().cast::<i8>();
+        let last = start.wrapping_add(std::mem::size_of_val(items).saturating_sub(1));
+        // SAFETY: a prefetch reads nothing and never faults.
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(start);
+            _mm_prefetch::<_MM_HINT_T0>(last);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = items;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

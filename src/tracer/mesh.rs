@@ -303,6 +303,11 @@ impl<V: Lanes, T: Stored> Visit<V> for NearestVisit<'_, V, T> {
         best.prim[i * n..i * n + n].copy_from_slice(&half.prim[..n]);
     }
 
+    #[inline(always)]
+    fn fetch(&self, first: usize, count: usize) {
+        crate::lanes::fetch(&self.tris[first..first + count]);
+    }
+
     /// `leaf` for lane `k` alone, in `V::One`: the same operations on the same values.
     #[inline(always)]
     fn leaf_one(&mut self, _: &Slabs<V>, first: usize, count: usize, k: usize) {
@@ -360,6 +365,11 @@ impl<V: Lanes, T: Stored> Visit<V> for AnyVisit<'_, V, T> {
         let max_t = self.max_t.half(i);
         let blocked = blocked_leaf(tris, halves(dir, i), half_from(from, i), max_t, enter);
         self.blocked = self.blocked.or(V::M::from_bits(blocked.bits() << (i * n)));
+    }
+
+    #[inline(always)]
+    fn fetch(&self, first: usize, count: usize) {
+        crate::lanes::fetch(&self.tris[first..first + count]);
     }
 
     /// `leaf` for lane `k` alone, in `V::One`.

@@ -31,6 +31,10 @@ pub(crate) trait Visit<V: Lanes> {
     fn leaf_one(&mut self, slabs: &Slabs<V>, first: usize, count: usize, k: usize) {
         self.leaf(slabs, first, count, V::M::from_bits(1 << k));
     }
+    /// Asks the memory for the `count` leaf items from `first`, which a single ray's walk
+    /// will look at soon (a hint: by default nothing).
+    #[inline(always)]
+    fn fetch(&self, _first: usize, _count: usize) {}
 }
 
 /// Visits the leaves of `tree` whose boxes a lane of `lanes` enters before its limit, nearer
