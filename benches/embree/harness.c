@@ -46,6 +46,16 @@
  * With --shadow all (default) every eye hit casts one; with --shadow facing only hits whose
  * eye-facing geometric normal has N·L > 0 do (rayreel's rule "nothing more unless ¬(n_l ≤ 0)"
  * with the flat normal); the rest are counted as "backlit". --shadow none: eye rays only.
+ *
+ * Instanced modes (off by default; without them every other mode is unchanged):
+ *   --grid N [--grid-scale S]: the mesh is built once as its own scene (the BLAS), and a top
+ *     scene holds N·N RTC_GEOMETRY_TYPE_INSTANCE geometries of it; instance i (its geometry ID)
+ *     is scale S (0.35), then R_y((i·37) mod 360 degrees) = [[c,0,s],[0,1,0],[−s,0,c]], then
+ *     translate (i mod N + 0.5, 0, i div N + 0.5).
+ *   --single-scale S [--single-at x,y,z]: one instance, scale S, no rotation, at x,y,z (0,0,0).
+ *   The rays are world-space there in both --rays modes (no camera-relative shift; --rays picks
+ *   only the eye directions' arithmetic), and Embree's Ng, which is in the instanced scene's
+ *   space, is turned to world space with the instance's rotation before the shadow set-up.
  * ---------------------------------------------------------------------------------------
  */
 #define _GNU_SOURCE
@@ -449,6 +459,10 @@ typedef struct {
     bool rays_f64;
     enum RTCBuildQuality quality;
     bool robust;
+    int grid;            /* --grid N: N*N instances of the mesh (0: off, the plain one-mesh scene) */
+    double grid_scale;   /* --grid-scale S: their uniform scale (0.35) */
+    double single_scale; /* --single-scale S: one instance, scale S, at --single-at (0: off) */
+    double single_at[3]; /* --single-at x,y,z (0,0,0) */
 } Options;
 
 static void parse_vec(const char* s, double v[3], const char* name) {
@@ -478,7 +492,8 @@ static void usage(void) {
           "               [--build-repeat N] [--quality low|medium|high] [--robust]\n"
           "               [--rays f32|f64] [--shadow all|facing|none]\n"
           "               [--depth-out FILE.pfm] [--depth-kind ray|planar]\n"
-          "               [--primid-out FILE.u32]\n",
+          "               [--primid-out FILE.u32]\n"
+          "               [--grid N [--grid-scale S]] | [--single-scale S [--single-at x,y,z]]\n",
           stderr);
     exit(2);
 }
@@ -488,6 +503,7 @@ static Options parse_args(int argc, char** argv) {
     memset(&o, 0, sizeof o);
     o.width = 1920; o.height = 1080; o.threads = 2; o.repeat = 10; o.build_repeat = 3;
     o.up[1] = 1; o.fov = 90; o.quality = RTC_BUILD_QUALITY_MEDIUM;
+    o.grid_scale = 0.35;
     bool have_eye = false, have_at = false, have_light = false;
     for (int i = 1; i < argc; i++) {
         const char* a = argv[i];
@@ -533,10 +549,19 @@ static Options parse_args(int argc, char** argv) {
             else if (!strcmp(v, "medium")) o.quality = RTC_BUILD_QUALITY_MEDIUM;
             else if (!strcmp(v, "high")) o.quality = RTC_BUILD_QUALITY_HIGH;
             else die("--quality wants low, medium or high");
-        } else die("unknown option %s", a);
+        } else if (!strcmp(a, "--grid")) o.grid = (int)parse_int(v, a, 0, 1000);
+        else if (!strcmp(a, "--grid-scale") || !strcmp(a, "--single-scale")) {
+            char* e;
+            double x = strtod(v, &e);
+            if (e == v || *e || !(x >= 0 && x < 1e30) || (!strcmp(a, "--grid-scale") && !(x > 0)))
+                die("%s wants a positive number%s", a, strcmp(a, "--grid-scale") ? " (0: off)" : "");
+            if (!strcmp(a, "--grid-scale")) o.grid_scale = x; else o.single_scale = x;
+        } else if (!strcmp(a, "--single-at")) parse_vec(v, o.single_at, a);
+        else die("unknown option %s", a);
     }
     if (!o.mesh) usage();
     if (!have_eye || !have_at || !have_light) die("--eye, --look-at and --light are required");
+    if (o.grid > 0 && o.single_scale > 0) die("--grid and --single-scale exclude each other");
     return o;
 }
 
@@ -619,6 +644,12 @@ typedef struct {
     int next_row; /* atomic: next row of tiles to take */
     float* depth;
     uint32_t* primid;
+    /* instanced modes (--grid, --single-scale): per instance (its geometry ID in the top scene)
+     * cos and sin of its rotation about +y, to turn Embree's object-space Ng into world space;
+     * NULL in the plain one-mesh mode */
+    const float* inst_cos;
+    const float* inst_sin;
+    unsigned ninst;
 } Frame;
 
 typedef struct {
@@ -676,6 +707,19 @@ static void render_tile(Frame* f, int tx, int ty, Stats* st) {
         rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
     }
     rtcIntersect16(valid, f->scene, &ctx, &rh);
+    if (f->inst_cos) {
+        /* Embree reports Ng in the instanced (object) space. The instance's linear part is
+         * s·R_y(a) with s uniform, so the world normal is R_y(a)·Ng (up to length, which the
+         * shadow set-up normalises): (c·nx + s·nz, ny, −s·nx + c·nz). */
+        for (int k = 0; k < 16; k++) {
+            unsigned id = rh.hit.instID[0][k];
+            if (!valid[k] || id >= f->ninst) continue;
+            float cs = f->inst_cos[id], sn = f->inst_sin[id];
+            float nx = rh.hit.Ng_x[k], nz = rh.hit.Ng_z[k];
+            rh.hit.Ng_x[k] = cs * nx + sn * nz;
+            rh.hit.Ng_z[k] = -sn * nx + cs * nz;
+        }
+    }
 
     /* shadow rays, branch-free over the 16 lanes (so that the compiler vectorises it) */
     const float lx = c->light[0], ly = c->light[1], lz = c->light[2];
@@ -848,11 +892,58 @@ int main(int argc, char** argv) {
     rtcSetDeviceErrorFunction(dev, embree_error, NULL);
     rtcSetDeviceMemoryMonitorFunction(dev, memory_monitor, NULL);
 
+    /* instanced modes: --grid N (N*N instances) or --single-scale S (one). The mesh stays in its
+     * file's coordinates (the BLAS), the instances place it in the world, and the rays are
+     * world-space in both --rays modes (no camera-relative shift): origin (float)o, the light
+     * (float)light; --rays only picks how the eye directions are computed. */
+    const bool instanced = o.grid > 0 || o.single_scale > 0;
+    const unsigned ninst = o.grid > 0 ? (unsigned)o.grid * (unsigned)o.grid : instanced ? 1u : 0u;
+    float* xfm = NULL;
+    float* inst_cos = NULL;
+    float* inst_sin = NULL;
+    if (instanced) {
+        for (int k = 0; k < 3; k++) { cam.org[k] = (float)cam.pos[k]; cam.light[k] = (float)o.light[k]; }
+        cam.org_max = fmaxf(fmaxf(fabsf(cam.org[0]), fabsf(cam.org[1])), fabsf(cam.org[2]));
+        xfm = xmalloc((size_t)ninst * 12 * sizeof(float));
+        inst_cos = xmalloc((size_t)ninst * sizeof(float));
+        inst_sin = xmalloc((size_t)ninst * sizeof(float));
+        for (unsigned i = 0; i < ninst; i++) {
+            double sc, cs, sn, t[3];
+            if (o.grid > 0) {
+                /* instance i: scale S, then R_y((i·37) mod 360 degrees), then translate
+                 * (i mod N + 0.5, 0, i div N + 0.5); sin and cos exact at multiples of 90 */
+                const unsigned N = (unsigned)o.grid;
+                int deg = (int)(((unsigned long long)i * 37u) % 360u);
+                sc = o.grid_scale;
+                if (deg % 90 == 0) {
+                    static const double S4[4] = {0, 1, 0, -1}, C4[4] = {1, 0, -1, 0};
+                    sn = S4[deg / 90]; cs = C4[deg / 90];
+                } else {
+                    double r = deg * (M_PI / 180.0);
+                    sn = sin(r); cs = cos(r);
+                }
+                t[0] = (double)(i % N) + 0.5; t[1] = 0.0; t[2] = (double)(i / N) + 0.5;
+            } else {
+                sc = o.single_scale; cs = 1.0; sn = 0.0;
+                for (int k = 0; k < 3; k++) t[k] = o.single_at[k];
+            }
+            /* 3x4 row major: world = M·p + t with M = s·R_y(a), R_y(a) = [[c,0,s],[0,1,0],[−s,0,c]] */
+            float* x = xfm + 12 * (size_t)i;
+            x[0] = (float)(sc * cs);  x[1] = 0.0f;        x[2] = (float)(sc * sn);  x[3] = (float)t[0];
+            x[4] = 0.0f;              x[5] = (float)sc;   x[6] = 0.0f;              x[7] = (float)t[1];
+            x[8] = (float)(-sc * sn); x[9] = 0.0f;        x[10] = (float)(sc * cs); x[11] = (float)t[2];
+            inst_cos[i] = (float)cs;
+            inst_sin[i] = (float)sn;
+        }
+    }
+
     RTCGeometry geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
     float* vb = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m.nv);
     uint32_t* ib = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), m.nt);
-    /* f32 rays: the mesh is moved by −o in double, then rounded (rayreel's camera-relative f32) */
-    for (size_t v = 0; v < 3 * m.nv; v++) vb[v] = cam.f32 ? (float)(m.pos[v] - cam.pos[v % 3]) : (float)m.pos[v];
+    /* f32 rays: the mesh is moved by −o in double, then rounded (rayreel's camera-relative f32);
+     * instanced modes: the file's coordinates, rounded */
+    for (size_t v = 0; v < 3 * m.nv; v++)
+        vb[v] = (cam.f32 && !instanced) ? (float)(m.pos[v] - cam.pos[v % 3]) : (float)m.pos[v];
     memcpy(ib, m.tri, m.nt * 3 * sizeof(uint32_t));
     rtcSetGeometryBuildQuality(geom, o.quality);
     rtcCommitGeometry(geom);
@@ -862,7 +953,48 @@ int main(int argc, char** argv) {
     double* builds_cpu = xmalloc((size_t)o.build_repeat * sizeof(double));
     RTCScene scene = NULL;
     int64_t mem_scene = 0;
-    for (int b = 0; b < o.build_repeat; b++) {
+    /* instanced: per build the BLAS commit, the instances' creation, the top-level commit */
+    double* blas_ms = xmalloc((size_t)o.build_repeat * sizeof(double));
+    double* blas_cpu = xmalloc((size_t)o.build_repeat * sizeof(double));
+    double* top_ms = xmalloc((size_t)o.build_repeat * sizeof(double));
+    double* top_cpu = xmalloc((size_t)o.build_repeat * sizeof(double));
+    double* setup_ms = xmalloc((size_t)o.build_repeat * sizeof(double));
+    RTCScene blas = NULL;
+    for (int b = 0; b < o.build_repeat && instanced; b++) {
+        if (scene) rtcReleaseScene(scene);
+        if (blas) rtcReleaseScene(blas);
+        int64_t before = __atomic_load_n(&mem_now, __ATOMIC_RELAXED);
+        blas = rtcNewScene(dev);
+        rtcSetSceneBuildQuality(blas, o.quality);
+        rtcSetSceneFlags(blas, o.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+        rtcAttachGeometry(blas, geom);
+        double tb = now_ms(), cb = cpu_ms();
+        rtcCommitScene(blas);
+        blas_ms[b] = now_ms() - tb;
+        blas_cpu[b] = cpu_ms() - cb;
+        double ts = now_ms();
+        scene = rtcNewScene(dev);
+        rtcSetSceneBuildQuality(scene, o.quality);
+        rtcSetSceneFlags(scene, o.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+        for (unsigned i = 0; i < ninst; i++) {
+            RTCGeometry inst = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(inst, blas);
+            rtcSetGeometryTimeStepCount(inst, 1);
+            rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm + 12 * (size_t)i);
+            rtcCommitGeometry(inst);
+            rtcAttachGeometryByID(scene, inst, i);
+            rtcReleaseGeometry(inst);
+        }
+        setup_ms[b] = now_ms() - ts;
+        tb = now_ms(); cb = cpu_ms();
+        rtcCommitScene(scene);
+        top_ms[b] = now_ms() - tb;
+        top_cpu[b] = cpu_ms() - cb;
+        builds[b] = blas_ms[b] + top_ms[b];
+        builds_cpu[b] = blas_cpu[b] + top_cpu[b];
+        mem_scene = __atomic_load_n(&mem_now, __ATOMIC_RELAXED) - before;
+    }
+    for (int b = 0; b < o.build_repeat && !instanced; b++) {
         if (scene) rtcReleaseScene(scene);
         int64_t before = __atomic_load_n(&mem_now, __ATOMIC_RELAXED);
         scene = rtcNewScene(dev);
@@ -880,12 +1012,28 @@ int main(int argc, char** argv) {
     double build_best = builds[0];
     double build_med = median(builds, o.build_repeat);
     double build_cpu_med = median(builds_cpu, o.build_repeat);
+    char extra[1024] = "";
+    if (instanced) {
+        double blas_med = median(blas_ms, o.build_repeat), top_med = median(top_ms, o.build_repeat);
+        double blas_best = blas_ms[0], top_best = top_ms[0]; /* sorted by median() */
+        snprintf(extra, sizeof extra,
+                 ",\"mode\":\"%s\",\"instances\":%u,\"grid\":%d,\"grid_scale\":%.9g,\"single_scale\":%.9g,"
+                 "\"single_at\":[%.9g,%.9g,%.9g],\"instanced_triangles\":%llu,"
+                 "\"blas_build_ms\":%.3f,\"blas_build_ms_median\":%.3f,\"top_build_ms\":%.3f,\"top_build_ms_median\":%.3f,"
+                 "\"blas_build_cpu_ms_median\":%.3f,\"top_build_cpu_ms_median\":%.3f,\"instance_setup_ms_median\":%.3f,"
+                 "\"camera_relative\":false",
+                 o.grid > 0 ? "grid" : "single", ninst, o.grid, o.grid > 0 ? o.grid_scale : 0.0, o.single_scale,
+                 o.single_at[0], o.single_at[1], o.single_at[2], (unsigned long long)m.nt * ninst,
+                 blas_best, blas_med, top_best, top_med, median(blas_cpu, o.build_repeat),
+                 median(top_cpu, o.build_repeat), median(setup_ms, o.build_repeat));
+    }
 
     /* frames: one warm-up, then --repeat timed */
     size_t npix = (size_t)o.width * o.height;
     Frame f;
     memset(&f, 0, sizeof f);
     f.o = &o; f.cam = &cam; f.scene = scene;
+    if (instanced) { f.inst_cos = inst_cos; f.inst_sin = inst_sin; f.ninst = ninst; }
     f.tiles_x = (o.width + 3) / 4; f.tiles_y = (o.height + 3) / 4;
     if (o.depth_out) f.depth = xmalloc(npix * sizeof(float));
     if (o.primid_out) f.primid = xmalloc(npix * sizeof(uint32_t));
@@ -925,6 +1073,10 @@ int main(int argc, char** argv) {
     char mesh_json[1024];
     json_escape(mesh_json, sizeof mesh_json, o.mesh);
     uint64_t rays = (uint64_t)npix + st.shadow_rays;
+    if (instanced) {
+        size_t n = strlen(extra);
+        snprintf(extra + n, sizeof extra - n, ",\"hit_fraction\":%.6f", (double)st.hits / (double)npix);
+    }
     printf("{\"triangles\":%zu,\"build_ms\":%.3f,\"frame_ms_best\":%.3f,\"frame_ms_median\":%.3f,"
            "\"fps\":%.3f,\"rays_per_s\":%.0f,\"hits\":%llu,\"shadowed\":%llu,"
            "\"shadow_rays\":%llu,\"backlit\":%llu,\"eye_rays\":%zu,\"vertices\":%zu,\"polygons\":%zu,"
@@ -932,19 +1084,21 @@ int main(int argc, char** argv) {
            "\"frame_cpu_ms_median\":%.3f,\"builds\":%d,\"frames\":%d,"
            "\"load_ms\":%.1f,\"bvh_mem_mb\":%.2f,\"embree_mem_peak_mb\":%.2f,"
            "\"loadavg_1m\":%.2f,\"width\":%d,\"height\":%d,\"threads\":%d,\"build_quality\":\"%s\",\"scene_flags\":\"%s\","
-           "\"shadow\":\"%s\",\"rays\":\"%s\",\"embree\":\"%s\",\"native_ray16\":%s,\"mesh\":\"%s\"}\n",
+           "\"shadow\":\"%s\",\"rays\":\"%s\",\"embree\":\"%s\",\"native_ray16\":%s,\"mesh\":\"%s\"%s}\n",
            m.nt, build_best, fbest, fmed, 1000.0 / fmed, (double)rays / (fmed * 1e-3),
            (unsigned long long)st.hits, (unsigned long long)st.shadowed, (unsigned long long)st.shadow_rays,
            (unsigned long long)st.backlit, npix, m.nv, m.polygons, build_med, build_first, build_cpu_med, fcpu_med, o.build_repeat,
            o.repeat, load_ms, (double)mem_scene / (1 << 20), (double)mem_peak / (1 << 20), load_at_start, o.width, o.height,
            o.threads, quality_name(o.quality), o.robust ? "robust" : "none", o.shadow_none ? "none" : o.shadow_facing ? "facing" : "all", cam.f32 ? "f32" : "f64",
            RTC_VERSION_STRING, rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) ? "true" : "false",
-           mesh_json);
+           mesh_json, extra);
 
     rtcReleaseScene(scene);
+    if (blas) rtcReleaseScene(blas);
     rtcReleaseGeometry(geom);
     rtcReleaseDevice(dev);
     free(m.pos); free(m.tri); free(builds); free(frames); free(builds_cpu); free(frames_cpu); free(f.depth); free(f.primid);
     free(cam.xs_d); free(cam.ys_d); free(cam.xs_f); free(cam.ys_f);
+    free(blas_ms); free(blas_cpu); free(top_ms); free(top_cpu); free(setup_ms); free(xfm); free(inst_cos); free(inst_sin);
     return 0;
 }
