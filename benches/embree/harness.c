@@ -465,6 +465,14 @@ typedef struct {
     double single_at[3]; /* --single-at x,y,z (0,0,0) */
 } Options;
 
+/* A fresh scene with the build quality and flags the options ask for. */
+static RTCScene new_scene(RTCDevice dev, const Options* o) {
+    RTCScene s = rtcNewScene(dev);
+    rtcSetSceneBuildQuality(s, o->quality);
+    rtcSetSceneFlags(s, o->robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+    return s;
+}
+
 static void parse_vec(const char* s, double v[3], const char* name) {
     char* e;
     for (int k = 0; k < 3; k++) {
@@ -964,18 +972,14 @@ int main(int argc, char** argv) {
         if (scene) rtcReleaseScene(scene);
         if (blas) rtcReleaseScene(blas);
         int64_t before = __atomic_load_n(&mem_now, __ATOMIC_RELAXED);
-        blas = rtcNewScene(dev);
-        rtcSetSceneBuildQuality(blas, o.quality);
-        rtcSetSceneFlags(blas, o.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+        blas = new_scene(dev, &o);
         rtcAttachGeometry(blas, geom);
         double tb = now_ms(), cb = cpu_ms();
         rtcCommitScene(blas);
         blas_ms[b] = now_ms() - tb;
         blas_cpu[b] = cpu_ms() - cb;
         double ts = now_ms();
-        scene = rtcNewScene(dev);
-        rtcSetSceneBuildQuality(scene, o.quality);
-        rtcSetSceneFlags(scene, o.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+        scene = new_scene(dev, &o);
         for (unsigned i = 0; i < ninst; i++) {
             RTCGeometry inst = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_INSTANCE);
             rtcSetGeometryInstancedScene(inst, blas);
@@ -997,9 +1001,7 @@ int main(int argc, char** argv) {
     for (int b = 0; b < o.build_repeat && !instanced; b++) {
         if (scene) rtcReleaseScene(scene);
         int64_t before = __atomic_load_n(&mem_now, __ATOMIC_RELAXED);
-        scene = rtcNewScene(dev);
-        rtcSetSceneBuildQuality(scene, o.quality);
-        rtcSetSceneFlags(scene, o.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+        scene = new_scene(dev, &o);
         rtcAttachGeometry(scene, geom);
         double tb = now_ms(), cb = cpu_ms();
         rtcCommitScene(scene);
