@@ -10,25 +10,10 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$root"
 [ -n "${RAYREEL:-}" ] || cargo build --quiet --release
 dir=target/meshes
-scene() { # name file eye look fov light precision
-    cat > "$dir/$1-$7.yaml" <<YAML
-render: { width: 1920, height: 1080, samples: 1, max_depth: 1, precision: $7 }
-materials:
-  clay: { ambient: [0.1, 0.08, 0.06], diffuse: [0.7, 0.55, 0.45], specular: [0.4, 0.4, 0.4], shininess: 60 }
-objects:
-  - mesh: { file: $2, material: clay }
-lights:
-  - point: { position: [$6], ambient: [1, 1, 1], diffuse: [1, 1, 1], specular: [1, 1, 1] }
-timeline:
-  fps: 24
-  keyframes:
-    - { time: 0, position: [$3], look_at: [$4], fov: $5 }
-    - { time: 1, position: [$3], look_at: [$4], fov: $5 }
-YAML
-}
+. benches/embree/views.sh
 for p in f32 f64; do
-    scene blob blob71.ply "0.5, 0.9, 4.2" "0, 0, 0" 50 "3, 4, 5" $p
-    scene terrain terrain1001.ply "0, 0.6, 0.95" "0, -0.02, 0.16" 60 "-2.5, 1.2, -1.5" $p
+    scene blob $p
+    scene terrain $p
 done
 for name in blob terrain; do
     for p in f32 f64; do

@@ -1,5 +1,5 @@
 #!/bin/sh
-# The Embree side of issue 26's side-by-side mesh comparison, in one run:
+# The Embree side of the side-by-side mesh comparison, in one run:
 # builds the harness, generates the two benchmark meshes (once) and prints one JSON line for
 # each: the ~100k-triangle blob and the 2M-triangle terrain at 1920x1080, 2 threads.
 # Extra arguments go to every harness run (e.g. --shadow facing, --robust, --repeat 5).
@@ -17,8 +17,6 @@ mkdir -p target/meshes
     cargo run --quiet --release --example gen_mesh -- blob 71 target/meshes/blob71.ply
 [ -f target/meshes/terrain1001.ply ] ||
     cargo run --quiet --release --example gen_mesh -- terrain 1001 target/meshes/terrain1001.ply
-h=target/embree/harness
-$h target/meshes/blob71.ply --width 1920 --height 1080 --eye 0.5,0.9,4.2 --look-at 0,0,0 \
-    --up 0,1,0 --fov 50 --light 3,4,5 --threads 2 --repeat 20 --build-repeat 5 "$@"
-$h target/meshes/terrain1001.ply --width 1920 --height 1080 --eye 0,0.6,0.95 --look-at 0,-0.02,0.16 \
-    --up 0,1,0 --fov 60 --light -2.5,1.2,-1.5 --threads 2 --repeat 20 --build-repeat 5 "$@"
+. benches/embree/views.sh
+embree blob --repeat 20 --build-repeat 5 "$@"
+embree terrain --repeat 20 --build-repeat 5 "$@"
