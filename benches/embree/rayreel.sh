@@ -9,7 +9,6 @@ set -eu
 root=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$root"
 [ -n "${RAYREEL:-}" ] || cargo build --quiet --release
-dir=target/meshes
 . benches/embree/views.sh
 for p in f32 f64; do
     scene blob $p
@@ -17,7 +16,7 @@ for p in f32 f64; do
 done
 for name in blob terrain; do
     for p in f32 f64; do
-        out=$(/usr/bin/time -f "%e %U %S" ${RAYREEL:-target/release/rayreel} render "$dir/$name-$p.yaml" \
+        out=$(/usr/bin/time -f "%e %U %S" ${RAYREEL:-target/release/rayreel} render "target/meshes/$name-$p.yaml" \
             --pipe raw --quiet --frames 0-23 "$@" 2>&1 >/dev/null | tail -1)
         echo "$name $p" "$out" | awk '{ printf "%s %s: %.1f ms wall, %.1f ms CPU a frame (24 frames, load and hierarchy included)\n", $1, $2, 1000*$3/24, 1000*($4+$5)/24 }'
     done
