@@ -224,6 +224,15 @@ impl Exposure {
     pub(crate) fn sampled(&self) -> bool {
         self.camera.lens_radius > 0.0 || !self.instants.is_empty()
     }
+
+    /// Whether some camera the samples use has an open lens: one of the open shutter's
+    /// instants, or without instants the frame's own (the film filter's wide case).
+    pub(crate) fn lens_open(&self) -> bool {
+        match self.instants.is_empty() {
+            true => self.camera.lens_radius > 0.0,
+            false => self.instants.iter().any(|c| c.lens_radius > 0.0),
+        }
+    }
 }
 
 impl Staged {

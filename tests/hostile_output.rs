@@ -454,8 +454,8 @@ fn the_ffmpeg_line_names_files_with_newlines_and_tabs_exactly() {
 
 /// An 8192×8192 EXR with alpha and depth under a 3 GB address-space limit (issue 29): it once
 /// rendered until an allocation failed and aborted with a backtrace (exit 134). Its memory is
-/// now worked out before the first frame: about 5.4 GB a frame (3.2 GB of planes, and the
-/// adaptive pass's buffers were it to extend every pixel) does not fit, so the run is
+/// now worked out before the first frame: about 6.4 GB a frame (3.2 GB of planes, and the
+/// adaptive pass's or the film filter's buffers) does not fit, so the run is
 /// refused at once, naming the limit; a size that fits two frames at a time runs with a note.
 #[test]
 fn a_job_that_cannot_fit_in_memory_is_refused_before_it_starts() {
@@ -471,7 +471,7 @@ fn a_job_that_cannot_fit_in_memory_is_refused_before_it_starts() {
     assert_eq!(out.status.code(), Some(1), "{said}");
     assert!(started.elapsed().as_secs() < 20, "{said}");
     assert!(
-        said.contains("not enough memory: one frame needs about 5.")
+        said.contains("not enough memory: one frame needs about 6.")
             && said.contains("under RLIMIT_AS (ulimit -v)")
             && !said.contains("panicked"),
         "{said}"

@@ -483,9 +483,10 @@ impl Canon for Settings {
         if !aov.is_empty() {
             h.write(&[3, aov.bits()]);
         }
-        // And the film filter adds the byte 4 (it is only ever on for film).
+        // And the film filter adds the byte 5 (it is only ever on for film). It was 4 before
+        // lens frames took the filter's three passes: film frames written then are stale once.
         if *denoise {
-            h.write(&[4]);
+            h.write(&[5]);
         }
     }
 }
@@ -643,13 +644,13 @@ mod tests {
             of_run(&scene, &passes, &png).hex(),
             Hasher::new().write(&bytes).hex()
         );
-        // The film filter appends the byte 4 after those.
+        // The film filter appends the byte 5 after those.
         let filtered = Settings {
             denoise: true,
             ..passes
         };
         let n = bytes.len();
-        bytes.insert(n - 2, 4);
+        bytes.insert(n - 2, 5);
         assert_eq!(
             of_run(&scene, &filtered, &png).hex(),
             Hasher::new().write(&bytes).hex()

@@ -5,10 +5,11 @@
 //!
 //! Per frame (bytes a pixel): the tracer's planes, 12 for RGB, 4 each for alpha and depth, 4 a
 //! channel of compositing passes, and with adaptive sampling 4 for each pixel's spread or error
-//! estimate and 28 for a pass that extends every pixel (its index, its new mean, coverage and
-//! estimate, the estimate copied out: film's first round does), or, after the rounds, for the
-//! film filter (each pixel's variance, guide and new mean; also without adaptive sampling when
-//! the filter is on); then, while that frame is encoded,
+//! estimate and, the larger of the two, 28 for a pass that extends every pixel (its index, its
+//! new mean, coverage and estimate, the estimate copied out: film's first round does) or 44,
+//! after the rounds, for a pass of the film filter (each pixel's planar mean, variance and
+//! guide, and its new mean and variance; also without adaptive sampling when the filter is
+//! on); then, while that frame is encoded,
 //! EXR's channel planes (2 a colour sample in half, 4 in float, depth and passes 4), one f32 plane copied out before conversion, and the file's
 //! bytes (at most the channels again: ZIP never doubles them); PNG's or the stream's integer
 //! samples and the file's bytes. What may be used is the budget's figure (`crate::budget`: the
@@ -36,7 +37,7 @@ pub(crate) fn frame_bytes(settings: &Settings, format: Option<FileFormat>) -> u6
     let adaptive = u64::from(settings.adaptive.is_some() || settings.denoise);
     // Compositing passes: f32 planes, copied once more into the EXR's channels.
     let passes: u64 = settings.aov.iter().map(|p| 4 * p.channels()).sum();
-    let render = 12 + 4 * a + 4 * d + 32 * adaptive + passes;
+    let render = 12 + 4 * a + 4 * d + 48 * adaptive + passes;
     let encode = match format {
         Some(FileFormat::Exr { precision }) => {
             let s = match precision {

@@ -29,7 +29,8 @@ pub use meshes::Folders;
 pub(crate) use messages::num;
 pub use settings::{
     DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES, DEFAULT_SAMPLING_MAX, DEFAULT_THRESHOLD, FILM_FINAL_MAX,
-    FILM_FINAL_THRESHOLD, FILM_SAMPLING_MAX, FILM_THRESHOLD, LENS_SAMPLES, SHUTTER_SAMPLES,
+    FILM_FINAL_THRESHOLD, FILM_SAMPLING_MAX, LENS_SAMPLES, LENS_THRESHOLD, SHUTTER_SAMPLES,
+    SHUTTER_THRESHOLD,
 };
 pub(crate) use settings::{
     Explicit, MAX_SAMPLES, default_sampling, denoise, exposure, output_pattern, preset,

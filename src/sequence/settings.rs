@@ -177,8 +177,10 @@ pub(crate) fn default_sampling(s: &mut Settings, film: Film) {
     let (samples, threshold, max_samples) = match film {
         Film::Pinhole => (DEFAULT_SAMPLES, DEFAULT_THRESHOLD, DEFAULT_SAMPLING_MAX),
         // A lens's blur is wider than a shutter's smear: more samples before the first round.
-        Film::Shutter => (SHUTTER_SAMPLES, FILM_THRESHOLD, FILM_SAMPLING_MAX),
-        Film::Lens => (LENS_SAMPLES, FILM_THRESHOLD, FILM_SAMPLING_MAX),
+        // A shutter's frames take a tighter threshold: the film filter's one pass there leaves
+        // more of the grain than its three passes on a lens frame (docs/quality.md).
+        Film::Shutter => (SHUTTER_SAMPLES, SHUTTER_THRESHOLD, FILM_SAMPLING_MAX),
+        Film::Lens => (LENS_SAMPLES, LENS_THRESHOLD, FILM_SAMPLING_MAX),
     };
     s.samples = samples;
     s.adaptive = Some(Adaptive {
@@ -192,10 +194,12 @@ pub const DEFAULT_SAMPLES: u32 = 2;
 /// `render.adaptive.max_samples` when a file sets no sampling.
 pub const DEFAULT_SAMPLING_MAX: u32 = 8;
 /// `render.samples`, `render.adaptive.threshold` and `max_samples` when a file with a
-/// shutter on a moving camera (`SHUTTER_SAMPLES`) or a lens (`LENS_SAMPLES`) sets no sampling.
+/// shutter on a moving camera (`SHUTTER_SAMPLES`, `SHUTTER_THRESHOLD`) or a lens
+/// (`LENS_SAMPLES`, `LENS_THRESHOLD`) sets no sampling.
 pub const SHUTTER_SAMPLES: u32 = 2;
 pub const LENS_SAMPLES: u32 = 4;
-pub const FILM_THRESHOLD: f64 = 0.035;
+pub const SHUTTER_THRESHOLD: f64 = 0.025;
+pub const LENS_THRESHOLD: f64 = 0.035;
 pub const FILM_SAMPLING_MAX: u32 = 64;
 /// `final`'s threshold and most samples on film.
 pub const FILM_FINAL_THRESHOLD: f64 = 0.01;

@@ -332,7 +332,8 @@ fn render_frame(
     }
     // The film filter, before the exposure scales what the error estimates describe.
     if first.rounds && settings.denoise {
-        crate::denoise::filter(&mut rgb, &spread, alpha.as_deref(), w);
+        let wide = crate::denoise::Reach::of(exposure.lens_open());
+        crate::denoise::filter(&mut rgb, &spread, alpha.as_deref(), w, wide);
     }
     if settings.exposure != 0.0 {
         expose(&mut rgb, settings.exposure);

@@ -187,7 +187,7 @@ def render(n, rounds, e32=True):
             est[px] = estimate(m, tuple(fd(x, float(total-have)) for x in B), e32)
         have, last = total, go
     print('rounds', log, file=sys.stderr)
-    return fr.film_filter(mean, est)
+    return fr.film_filter(mean, est, fr.RHO > 0.0)
 
 if __name__ == '__main__':
     out = sys.argv[1]; a = sys.argv[2:]

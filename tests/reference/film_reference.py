@@ -402,7 +402,8 @@ def min_(x, y):
     return x if x < y else y
 
 
-def render_rounds(n, max_samples, threshold, first_mean='sequential', stats=None):
+def render_rounds(n, max_samples, threshold, first_mean='sequential', stats=None, lens=None):
+    """`lens`: whether the frame's lens is open (the film filter's reach); by default RHO > 0."""
     thr = f32(threshold)
     h = n // 2
     mean = [None] * (W * H)
@@ -458,50 +459,58 @@ def render_rounds(n, max_samples, threshold, first_mean='sequential', stats=None
         last = go
     if stats is not None:
         stats['rounds'] = rounds
-    return film_filter(mean, est)
+    return film_filter(mean, est, RHO > 0.0 if lens is None else lens)
 
 
 # ---------------------------------------------------------------- film filter (f32)
-def film_filter(mean, est):
-    """docs/spec/tracer.md, Film filter: every operation in f32 (no alpha here: all whole)."""
+def film_filter(mean, est, lens=True):
+    """docs/spec/tracer.md, Film filter: every operation in f32 (no alpha here: all whole).
+    `lens`: the frame's lens is open (three passes at steps 1, 2, 4 with K = 16), else one pass
+    at step 1 with K = 9."""
     F = f32(1.6e-5)
+    steps, K = ((1, 2, 4), 16.0) if lens else ((1,), 9.0)
 
-    def block(p):
+    def block(p, s):
         i, j = divmod(p, W)
-        return [ii * W + jj for ii in range(max(i - 1, 0), min(i + 2, H))
-                for jj in range(max(j - 1, 0), min(j + 2, W))]
+        return [ii * W + jj for ii in (i - s, i, i + s) if 0 <= ii < H
+                for jj in (j - s, j, j + s) if 0 <= jj < W]
 
     var = []
     for p in range(W * H):
-        s, n = 0.0, 0.0
-        for q in block(p):
-            s = f32(s + f32(est[q] * est[q]))
+        acc, n = 0.0, 0.0
+        for q in block(p, 1):
+            acc = f32(acc + f32(est[q] * est[q]))
             n = f32(n + 1.0)
-        var.append(f32(s / n))
-    guide = [tuple(f32(math.sqrt(max_(c, 0.0))) for c in m) for m in mean]
+        var.append(f32(acc / n))
     tap = (0.5, 0.25)
-    out = []
-    for p in range(W * H):
-        vp = var[p]
-        if not (vp > F):
-            out.append(mean[p])
-            continue
-        acc, total = [0.0, 0.0, 0.0], 0.0
-        for q in block(p):
-            d2 = 0.0
-            for c in range(3):
-                d = f32(guide[p][c] - guide[q][c])
-                dd = f32(d * d)
-                d2 = dd if dd > d2 else d2
-            a = f32(9.0 * f32(vp + var[q]))
-            r = f32(a / f32(a + d2))
-            t = f32(tap[abs(q // W - p // W)] * tap[abs(q % W - p % W)])
-            weight = f32(t * f32(r * r))
-            for c in range(3):
-                acc[c] = f32(acc[c] + f32(weight * mean[q][c]))
-            total = f32(total + weight)
-        out.append(tuple(f32(acc[c] / total) for c in range(3)))
-    return out
+    for s in steps:
+        guide = [tuple(f32(math.sqrt(max_(c, 0.0))) for c in m) for m in mean]
+        out, out_var = [], []
+        for p in range(W * H):
+            vp = var[p]
+            if not (vp > F):
+                out.append(mean[p])
+                out_var.append(vp)
+                continue
+            acc, total, V = [0.0, 0.0, 0.0], 0.0, 0.0
+            for q in block(p, s):
+                d2 = 0.0
+                for c in range(3):
+                    d = f32(guide[p][c] - guide[q][c])
+                    dd = f32(d * d)
+                    d2 = dd if dd > d2 else d2
+                a = f32(K * f32(vp + var[q]))
+                r = f32(a / f32(a + d2))
+                t = f32(tap[abs(q // W - p // W) // s] * tap[abs(q % W - p % W) // s])
+                weight = f32(t * f32(r * r))
+                for c in range(3):
+                    acc[c] = f32(acc[c] + f32(weight * mean[q][c]))
+                total = f32(total + weight)
+                V = f32(V + f32(f32(weight * weight) * var[q]))
+            out.append(tuple(f32(acc[c] / total) for c in range(3)))
+            out_var.append(f32(V / f32(total * total)))
+        mean, var = out, out_var
+    return mean
 
 
 def main():

@@ -75,7 +75,7 @@ FR_SAMPLE_COLOUR = fr.sample_colour  # film_reference's own tracer, for lens fra
 #   track under smooth timing, straight ones included (as fov): the blue sphere of BLUR has a
 #   radius that goes up then down; without the stop 44 to 214 bytes of its frames change.
 # - Default sampling of a frame where only things move under a shutter: the "shutter on a
-#   moving camera" case of sequence-file.md (2 samples, rounds up to 64 at 0.035, the film
+#   moving camera" case of sequence-file.md (2 samples, rounds up to 64 at 0.025, the film
 #   filter); 4 samples would change 657 bytes of blur_default.
 # - The shutter's interval at a fractional fps, Δ = (θ/360)/fps with fps = num/den as one f64.
 # - A key that sets no keyable field (`{ time: 0 }`) is a key holding the carried values.
@@ -582,10 +582,9 @@ class Frame:
             max_s = int(ad.get('max_samples', 32)) if ad else n
             thr = float(ad.get('threshold', 0.03)) if ad else 0.03
         else:
-            # sequence-file.md: "on film, 2 (a shutter on a moving camera) or 4 (a lens some key
-            # opens) with adaptive rounds up to 64 at threshold 0.035" (reading: things moving
-            # under a shutter count as the shutter's case)
-            n, max_s, thr = 2, 64, 0.035
+            # sequence-file.md: "on film, 2 (a shutter on a camera that moves or in a scene whose
+            # objects or lights have keys) with adaptive rounds up to 64 at threshold 0.025"
+            n, max_s, thr = 2, 64, 0.025
         denoise = r.get('denoise', True)
         fr.FRAME, fr.W, fr.H = self.n, self.W, self.H
         img = np.zeros((self.H, self.W, 3))
@@ -598,12 +597,13 @@ class Frame:
         fr.sample_colour = self.film_sample
         keep_filter = fr.film_filter
         if not denoise:
-            fr.film_filter = lambda mean, est: mean
+            fr.film_filter = lambda mean, est, lens=True: mean
         try:
             if not denoise and max_s == n:
                 px = fr.render_uniform(n)
             else:
-                px = fr.render_rounds(n, max_s, thr)
+                # no lens here (lens frames go through render_lens): the filter's one pass
+                px = fr.render_rounds(n, max_s, thr, lens=False)
         finally:
             fr.film_filter = keep_filter
         for p, c in enumerate(px):
