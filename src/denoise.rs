@@ -187,20 +187,18 @@ impl Pass<'_> {
     /// columns lie within the frame, one at a time near the sides.
     fn row(&self, row: usize, out: [&mut [f32]; 3], out_var: &mut [f32]) {
         let (w, s) = (self.w, self.step);
-        let inner = s.min(w)..w.saturating_sub(s).max(s.min(w));
-        let chunks = inner.len() / LANES;
+        // Columns s … w − s − 1 have both side neighbours within the frame.
+        let (lo, chunks) = (s.min(w), w.saturating_sub(2 * s) / LANES);
+        let hi = lo + chunks * LANES;
         let mut to = (out, out_var);
-        let mut c = 0;
-        while c < w {
-            if c == inner.start && chunks > 0 {
-                for k in 0..chunks {
-                    self.pixels::<LANES>(row, c + k * LANES, &mut to);
-                }
-                c += chunks * LANES;
-            } else {
-                self.pixels::<1>(row, c, &mut to);
-                c += 1;
-            }
+        for c in 0..lo {
+            self.pixels::<1>(row, c, &mut to);
+        }
+        for c in (lo..hi).step_by(LANES) {
+            self.pixels::<LANES>(row, c, &mut to);
+        }
+        for c in hi..w {
+            self.pixels::<1>(row, c, &mut to);
         }
     }
 

@@ -332,8 +332,8 @@ fn render_frame(
     }
     // The film filter, before the exposure scales what the error estimates describe.
     if first.rounds && settings.denoise {
-        let wide = crate::denoise::Reach::of(exposure.lens_open());
-        crate::denoise::filter(&mut rgb, &spread, alpha.as_deref(), w, wide);
+        let reach = crate::denoise::Reach::of(exposure.lens_open());
+        crate::denoise::filter(&mut rgb, &spread, alpha.as_deref(), w, reach);
     }
     if settings.exposure != 0.0 {
         expose(&mut rgb, settings.exposure);
