@@ -13,6 +13,9 @@ use crate::scene::{Image, Level, Scene, Shape, Texture};
 use glam::{DVec2, DVec3};
 use std::f64::consts::PI;
 
+#[cfg(target_arch = "x86_64")]
+mod taps;
+
 /// The footprint cones of a packet's rays: full width at the origin, and growth per unit
 /// length (radians, small-angle).
 #[derive(Clone, Copy)]
@@ -125,13 +128,13 @@ unsafe fn color_sse41(world: &World, texture: &Texture, at: &At) -> DVec3 {
 }
 
 /// How a lookup takes ⌊x⌋: the same bits either way (`floor` is the library's, bit for bit).
-trait Round {
+pub(super) trait Round {
     fn floor(x: f64) -> f64;
 }
 
 /// The library's floor: one instruction where the caller is built with SSE4.1 (and on other
 /// architectures), a call where it is not.
-struct Native;
+pub(super) struct Native;
 
 impl Round for Native {
     #[inline(always)]
@@ -164,9 +167,10 @@ fn color_with<R: Round>(world: &World, texture: &Texture, at: &At) -> DVec3 {
         f.taps = checker_taps(f.taps, at.r, *size);
     }
     let major = f.major / f64::from(f.taps);
+    let held = held(scene, at);
     let centre = |k: u32| {
         let step = (f64::from(2 * k + 1) - f64::from(f.taps)) / f64::from(f.taps);
-        snap(scene, at, p + f.major * step)
+        snapped(&held, p + f.major * step)
     };
     let mut sum = DVec3::ZERO;
     match texture {
@@ -179,6 +183,18 @@ fn color_with<R: Round>(world: &World, texture: &Texture, at: &At) -> DVec3 {
                 major,
             };
             let half = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| tap.extent(a) / *size);
+            #[cfg(target_arch = "x86_64")]
+            if f.taps > 1 && std::is_x86_feature_detected!("avx2") {
+                let line = taps::Line {
+                    p,
+                    major: f.major,
+                    taps: f.taps,
+                    held,
+                };
+                // SAFETY: the CPU has AVX2.
+                let sum = unsafe { taps::checker_sum(*size, colors, &line, &half) };
+                return sum / f64::from(f.taps);
+            }
             for k in 0..f.taps {
                 sum += checker::<R>(*size, colors, centre(k), &half);
             }
@@ -258,26 +274,44 @@ fn point(scene: &Scene, at: &At) -> DVec3 {
 /// looked up at y = 0 exactly, whatever the rounding of the hit or of a tap's offset.
 #[inline(always)]
 fn snap(scene: &Scene, at: &At, p: DVec3) -> DVec3 {
-    let mut p = p.to_array();
+    snapped(&held(scene, at), p)
+}
+
+/// The coordinates `snap` sets: `Some(value)` for each one the surface holds constant.
+#[inline(always)]
+fn held(scene: &Scene, at: &At) -> [Option<f64>; 3] {
+    let mut held = [None; 3];
     match scene.objects[at.object].shape {
         Shape::Plane { point, normal, .. } => {
             let n = normal.to_array();
             let axes = n.iter().filter(|c| **c != 0.0).count();
             if let (1, Some(i)) = (axes, n.iter().position(|c| *c != 0.0)) {
-                p[i] = point.to_array()[i];
+                held[i] = Some(point.to_array()[i]);
             }
         }
         Shape::Mesh { mesh, place, .. } => {
             let m = &scene.meshes[mesh];
             let q = m.triangles[at.prim as usize]
                 .map(|i| place.point(m.positions[i as usize]).to_array());
-            for i in 0..3 {
+            for (i, h) in held.iter_mut().enumerate() {
                 if q[0][i] == q[1][i] && q[1][i] == q[2][i] {
-                    p[i] = q[0][i];
+                    *h = Some(q[0][i]);
                 }
             }
         }
         Shape::Sphere { .. } => {}
+    }
+    held
+}
+
+/// `p` with the coordinates in `held` set.
+#[inline(always)]
+fn snapped(held: &[Option<f64>; 3], p: DVec3) -> DVec3 {
+    let mut p = p.to_array();
+    for (c, h) in p.iter_mut().zip(held) {
+        if let Some(v) = h {
+            *c = *v;
+        }
     }
     DVec3::from_array(p)
 }
@@ -342,7 +376,12 @@ impl Tap {
 /// cells: the product of three square waves, averaged axis by axis (their product's average
 /// over a box is the product of their averages); colour weights (1 ± A)/2.
 #[inline(always)]
-fn checker<R: Round>(size: f64, colors: &[DVec3; 2], p: DVec3, half: &[f64; 3]) -> DVec3 {
+pub(super) fn checker<R: Round>(
+    size: f64,
+    colors: &[DVec3; 2],
+    p: DVec3,
+    half: &[f64; 3],
+) -> DVec3 {
     let p = p.to_array();
     let mut a = 1.0;
     for i in 0..3 {
