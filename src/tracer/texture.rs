@@ -128,13 +128,13 @@ unsafe fn color_sse41(world: &World, texture: &Texture, at: &At) -> DVec3 {
 }
 
 /// How a lookup takes ⌊x⌋: the same bits either way (`floor` is the library's, bit for bit).
-pub(super) trait Round {
+trait Round {
     fn floor(x: f64) -> f64;
 }
 
 /// The library's floor: one instruction where the caller is built with SSE4.1 (and on other
 /// architectures), a call where it is not.
-pub(super) struct Native;
+struct Native;
 
 impl Round for Native {
     #[inline(always)]
@@ -166,14 +166,15 @@ fn color_with<R: Round>(world: &World, texture: &Texture, at: &At) -> DVec3 {
         }
         f.taps = checker_taps(f.taps, at.r, *size);
     }
-    let major = f.major / f64::from(f.taps);
-    let held = held(scene, at);
-    let centre = |k: u32| {
-        let step = (f64::from(2 * k + 1) - f64::from(f.taps)) / f64::from(f.taps);
-        snapped(&held, p + f.major * step)
+    let line = Line {
+        p,
+        major: f.major,
+        taps: f.taps,
+        held: held(scene, at),
     };
-    let mut sum = DVec3::ZERO;
-    match texture {
+    // The semi-axis of each tap's ellipse along the footprint's long axis.
+    let major = f.major / f64::from(f.taps);
+    let sum = match texture {
         Texture::Checker { size, colors } => {
             // Taps differ only in their centres: their boxes' half-widths are the same.
             let tap = Tap {
@@ -183,25 +184,12 @@ fn color_with<R: Round>(world: &World, texture: &Texture, at: &At) -> DVec3 {
                 major,
             };
             let half = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| tap.extent(a) / *size);
-            #[cfg(target_arch = "x86_64")]
-            if f.taps > 1 && std::is_x86_feature_detected!("avx2") {
-                let line = taps::Line {
-                    p,
-                    major: f.major,
-                    taps: f.taps,
-                    held,
-                };
-                // SAFETY: the CPU has AVX2.
-                let sum = unsafe { taps::checker_sum(*size, colors, &line, &half) };
-                return sum / f64::from(f.taps);
-            }
-            for k in 0..f.taps {
-                sum += checker::<R>(*size, colors, centre(k), &half);
-            }
+            checker_line::<R>(*size, colors, &line, &half)
         }
         Texture::Image { image, scale } => {
+            let mut sum = DVec3::ZERO;
             for k in 0..f.taps {
-                let c = centre(k);
+                let c = line.centre(k);
                 let tap = Tap {
                     p: c,
                     offset: c - p,
@@ -210,8 +198,9 @@ fn color_with<R: Round>(world: &World, texture: &Texture, at: &At) -> DVec3 {
                 };
                 sum += image_color::<R>(scene, image, *scale, at, &tap);
             }
+            sum
         }
-    }
+    };
     sum / f64::from(f.taps)
 }
 
@@ -372,16 +361,57 @@ impl Tap {
     }
 }
 
+/// The line a lookup's taps lie on: tap k of `taps` is centred at
+/// `p + major · (((2k + 1) − taps) / taps)`, with the coordinates in `held` set.
+struct Line {
+    p: DVec3,
+    major: DVec3,
+    taps: u32,
+    held: [Option<f64>; 3],
+}
+
+impl Line {
+    /// Tap k's centre.
+    #[inline(always)]
+    fn centre(&self, k: u32) -> DVec3 {
+        let taps = f64::from(self.taps);
+        let step = (f64::from(2 * k + 1) - taps) / taps;
+        snapped(&self.held, self.p + self.major * step)
+    }
+}
+
+/// Σ over the line's taps of `checker`, summed from tap 0 upwards from 0: four taps at a time
+/// where the CPU has AVX2 (`taps`, the same bits), else one at a time.
+#[inline(always)]
+fn checker_line<R: Round>(size: f64, colors: &[DVec3; 2], line: &Line, half: &[f64; 3]) -> DVec3 {
+    #[cfg(target_arch = "x86_64")]
+    if line.taps > 1 && std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2.
+        return unsafe { taps::checker_sum(size, colors, line, half) };
+    }
+    checker_taps_one_by_one::<R>(size, colors, line, half)
+}
+
+/// `checker_line` one tap at a time: the rule as docs/spec/texture.md writes it.
+#[inline(always)]
+fn checker_taps_one_by_one<R: Round>(
+    size: f64,
+    colors: &[DVec3; 2],
+    line: &Line,
+    half: &[f64; 3],
+) -> DVec3 {
+    let mut sum = DVec3::ZERO;
+    for k in 0..line.taps {
+        sum += checker::<R>(size, colors, line.centre(k), half);
+    }
+    sum
+}
+
 /// The checker averaged over a tap's bounding box, centred on `p` with half-widths `half` in
 /// cells: the product of three square waves, averaged axis by axis (their product's average
 /// over a box is the product of their averages); colour weights (1 ± A)/2.
 #[inline(always)]
-pub(super) fn checker<R: Round>(
-    size: f64,
-    colors: &[DVec3; 2],
-    p: DVec3,
-    half: &[f64; 3],
-) -> DVec3 {
+fn checker<R: Round>(size: f64, colors: &[DVec3; 2], p: DVec3, half: &[f64; 3]) -> DVec3 {
     let p = p.to_array();
     let mut a = 1.0;
     for i in 0..3 {

@@ -4,18 +4,9 @@
 //! compares the two). Near a horizon a lookup takes up to 16 taps, each three box averages:
 //! half the checker talk's instructions were these, one tap at a time.
 
-use super::TINY_BOX;
+use super::{Line, TINY_BOX};
 use glam::DVec3;
 use std::arch::x86_64::*;
-
-/// The line the taps lie on: tap k of `taps` is centred at
-/// `p + major · (((2k + 1) − taps) / taps)`, with the coordinates in `held` set.
-pub(super) struct Line {
-    pub p: DVec3,
-    pub major: DVec3,
-    pub taps: u32,
-    pub held: [Option<f64>; 3],
-}
 
 /// Σ over the line's taps, k = 0 upwards from 0, of `texture::checker(size, colors, centre(k),
 /// half)`.
@@ -129,24 +120,6 @@ fn triangle(u: __m256d) -> __m256d {
     _mm256_blendv_pd(_mm256_sub_pd(_mm256_set1_pd(2.0), f), f, below)
 }
 
-/// The scalar loop this replaces: `texture::color`'s checker taps one at a time.
-#[cfg(test)]
-pub(super) fn checker_sum_scalar(
-    size: f64,
-    colors: &[DVec3; 2],
-    line: &Line,
-    half: &[f64; 3],
-) -> DVec3 {
-    let mut sum = DVec3::ZERO;
-    for k in 0..line.taps {
-        let taps = f64::from(line.taps);
-        let step = (f64::from(2 * k + 1) - taps) / taps;
-        let centre = super::snapped(&line.held, line.p + line.major * step);
-        sum += super::checker::<super::Native>(size, colors, centre, half);
-    }
-    sum
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -192,7 +165,9 @@ mod tests {
             let size = [0.25, 0.5, 1.0, 3.0][case % 4 / 2 + case % 2];
             // SAFETY: AVX2 was detected.
             let fast = unsafe { checker_sum(size, &colors, &line, &half) };
-            let slow = checker_sum_scalar(size, &colors, &line, &half);
+            let slow = super::super::checker_taps_one_by_one::<super::super::Native>(
+                size, &colors, &line, &half,
+            );
             for (f, s) in fast.to_array().iter().zip(slow.to_array()) {
                 assert!(
                     f.to_bits() == s.to_bits() || (f.is_nan() && s.is_nan()),
