@@ -158,7 +158,8 @@ impl Round for Portable {
 #[inline(always)]
 fn color_with<R: Round>(world: &World, texture: &Texture, at: &At) -> DVec3 {
     let scene = world.unshifted.as_deref().unwrap_or(&world.scene);
-    let p = point(scene, at);
+    let held = held(scene, at);
+    let p = point(scene, at, &held);
     let mut f = Footprint::of(at);
     if let Texture::Checker { size, colors } = texture {
         if let Some(c) = one_cell::<R>(*size, colors, p, &f) {
@@ -170,7 +171,7 @@ fn color_with<R: Round>(world: &World, texture: &Texture, at: &At) -> DVec3 {
         p,
         major: f.major,
         taps: f.taps,
-        held: held(scene, at),
+        held,
     };
     // The semi-axis of each tap's ellipse along the footprint's long axis.
     let major = f.major / f64::from(f.taps);
@@ -242,9 +243,9 @@ fn checker_taps(taps: u32, r: f64, size: f64) -> u32 {
 }
 
 /// The point a lookup uses, from the scene in world coordinates: on a mesh the barycentric
-/// blend of the placed corners, elsewhere the hit; then `snap`ped.
+/// blend of the placed corners, elsewhere the hit; then `snapped` with the surface's `held`.
 #[inline(always)]
-fn point(scene: &Scene, at: &At) -> DVec3 {
+fn point(scene: &Scene, at: &At, held: &[Option<f64>; 3]) -> DVec3 {
     let p = match scene.objects[at.object].shape {
         Shape::Mesh { mesh, place, .. } => {
             let m = &scene.meshes[mesh];
@@ -254,19 +255,14 @@ fn point(scene: &Scene, at: &At) -> DVec3 {
         }
         _ => at.p,
     };
-    snap(scene, at, p)
+    snapped(held, p)
 }
 
-/// `p` with each coordinate the surface holds constant set to that constant: a plane whose
-/// normal has one non-zero component i has coordinate i of its point everywhere; a placed
-/// triangle whose three corners share coordinate i, that coordinate. So a floor at y = 0 is
-/// looked up at y = 0 exactly, whatever the rounding of the hit or of a tap's offset.
-#[inline(always)]
-fn snap(scene: &Scene, at: &At, p: DVec3) -> DVec3 {
-    snapped(&held(scene, at), p)
-}
-
-/// The coordinates `snap` sets: `Some(value)` for each one the surface holds constant.
+/// The coordinates the surface holds constant, `Some(value)` for each (`snapped` sets them):
+/// a plane whose normal has one non-zero component i has coordinate i of its point
+/// everywhere; a placed triangle whose three corners share coordinate i, that coordinate. So a
+/// floor at y = 0 is looked up at y = 0 exactly, whatever the rounding of the hit or of a
+/// tap's offset.
 #[inline(always)]
 fn held(scene: &Scene, at: &At) -> [Option<f64>; 3] {
     let mut held = [None; 3];
@@ -380,7 +376,7 @@ impl Line {
     }
 }
 
-/// Σ over the line's taps of `checker`, summed from tap 0 upwards from 0: four taps at a time
+/// Σ over the line's taps of `checker`, summed from tap 0 up, starting at 0: four taps at a time
 /// where the CPU has AVX2 (`taps`, the same bits), else one at a time.
 #[inline(always)]
 fn checker_line<R: Round>(size: f64, colors: &[DVec3; 2], line: &Line, half: &[f64; 3]) -> DVec3 {
