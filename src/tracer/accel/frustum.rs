@@ -86,6 +86,9 @@ pub(crate) struct Frustum<R: Real> {
     origin: [(R, R); 3],
     inv: [(R, R); 3],
     backwards: [bool; 3],
+    /// Every lane starts at one point (a pinhole's eye rays): each origin interval is that
+    /// point, and a plane's corners reduce to its two products (`corners` with o₀ = o₁).
+    point: bool,
     less: R,
     more: R,
 }
@@ -100,6 +103,7 @@ impl<R: Real> Frustum<R> {
             origin: [(R::ZERO, R::ZERO); 3],
             inv: [(R::ZERO, R::ZERO); 3],
             backwards: [false; 3],
+            point: false,
             less: R::of(1.0 - V::BOX_SLACK),
             more: R::of(1.0 + V::BOX_SLACK),
         };
@@ -108,6 +112,7 @@ impl<R: Real> Frustum<R> {
             f.origin[axis] = range(origin[axis], lanes);
             f.inv[axis] = range(inv[axis], lanes);
         }
+        f.point = f.origin.iter().all(|&(o0, o1)| o0 == o1);
         Some(f)
     }
 
@@ -138,6 +143,15 @@ impl<R: Real> Frustum<R> {
     /// the lanes' limits), and each one's least entry distance.
     #[inline(always)]
     pub(crate) fn children(&self, node: &Node, limit: R) -> (u32, [R; WIDTH]) {
+        match self.point {
+            true => self.children_as(node, limit, from_point),
+            false => self.children_as(node, limit, corners),
+        }
+    }
+
+    /// `children` with the corners' bounds of a plane taken by `bound`.
+    #[inline(always)]
+    fn children_as(&self, node: &Node, limit: R, bound: Bound<R::X4>) -> (u32, [R; WIDTH]) {
         let mut near = R::X4::splat(R::ZERO);
         let mut far = R::X4::splat(limit);
         for axis in 0..3 {
@@ -146,8 +160,8 @@ impl<R: Real> Frustum<R> {
                 true => (&node.hi[axis], &node.lo[axis]),
             };
             let (o, i) = (self.origin[axis], self.inv[axis]);
-            near = near.max(corners(R::X4::load(entry), o, i, R::X4::min));
-            far = far.min(corners(R::X4::load(exit), o, i, R::X4::max));
+            near = near.max(bound(R::X4::load(entry), o, i, R::X4::min));
+            far = far.min(bound(R::X4::load(exit), o, i, R::X4::max));
         }
         let (less, more) = (R::X4::splat(self.less), R::X4::splat(self.more));
         let hit = near.mul(less).le(far.mul(more));
@@ -160,6 +174,23 @@ impl<R: Real> Frustum<R> {
     pub(crate) fn before(&self, near: R, limit: R) -> bool {
         near * self.less <= limit * self.more
     }
+}
+
+/// A plane's bound over the packet's corners, as `corners` computes it.
+type Bound<X> =
+    fn(X, (<X as Four>::R, <X as Four>::R), (<X as Four>::R, <X as Four>::R), fn(X, X) -> X) -> X;
+
+/// `corners` when o₀ = o₁: its two differences are equal, so pick(pick(a·i₀, a·i₁),
+/// pick(a·i₀, a·i₁)) is pick(a·i₀, a·i₁) (picking a value against itself returns it).
+#[inline(always)]
+fn from_point<X: Four>(
+    p: X,
+    (o, _): (X::R, X::R),
+    (i0, i1): (X::R, X::R),
+    pick: fn(X, X) -> X,
+) -> X {
+    let a = p.sub(X::splat(o));
+    pick(a.mul(X::splat(i0)), a.mul(X::splat(i1)))
 }
 
 /// The least (`pick` = min) or greatest (max) of fl(fl(p − o)·i) over the corners of
@@ -181,7 +212,54 @@ fn corners<X: Four>(
 fn range<V: Lanes, R: Real>(v: V, lanes: V::M) -> (R, R) {
     // Lanes outside `lanes` take the first lane's value, which changes neither bound.
     let first = v.lane(lanes.bits().trailing_zeros() as usize);
-    let mut lo = R::lanes(V::select(lanes, v, V::splat(first)));
-    let mut hi = lo;
-    (fold::<V, R>(&mut lo, R::min), fold::<V, R>(&mut hi, R::max))
+    let v = V::select(lanes, v, V::splat(first));
+    // A pair's halves met in registers first (the lanes' min and max are `Real`'s), so
+    // the folds run over half as many values.
+    let (h0, h1) = (v.half(0), v.half(1));
+    let mut lo = R::lanes(h0.min(h1));
+    let mut hi = R::lanes(h0.max(h1));
+    (
+        fold::<V::Half, R>(&mut lo, R::min),
+        fold::<V::Half, R>(&mut hi, R::max),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// From one point, `from_point` gives `corners`' bits, in both precisions and for both
+    /// picks, over planes on either side of the origin and directions of either sign.
+    #[test]
+    fn a_point_origin_bounds_as_its_corners_do() {
+        let mut s = 7u64;
+        let mut rnd = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 8.0
+        };
+        for _ in 0..20_000 {
+            let row = [rnd() as f32, rnd() as f32, rnd() as f32, rnd() as f32];
+            let o = rnd();
+            let (a, b) = (rnd(), rnd());
+            let (i0, i1) = (a.min(b), a.max(b));
+            check::<Four32>(&row, o as f32, (i0 as f32, i1 as f32));
+            check::<Four64>(&row, o, (i0, i1));
+        }
+    }
+
+    fn check<X: Four>(row: &[f32; WIDTH], o: X::R, i: (X::R, X::R))
+    where
+        X::R: Into<f64>,
+    {
+        let bits = |x: X| x.array().map(|r| r.into().to_bits());
+        for pick in [X::min as fn(X, X) -> X, X::max] {
+            let p = X::load(row);
+            assert_eq!(
+                bits(from_point(p, (o, o), i, pick)),
+                bits(corners(p, (o, o), i, pick))
+            );
+        }
+    }
 }
