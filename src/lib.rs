@@ -43,6 +43,8 @@ pub mod sequence;
 mod settings;
 pub mod shutter;
 mod signals;
+#[cfg(test)]
+mod testing;
 pub mod timeline;
 pub mod tools;
 pub mod tracer;

@@ -555,13 +555,8 @@ mod tests {
     /// rotated, non-uniformly scaled placements, cancelling vertex normals among them.
     #[test]
     fn lane_normals_are_the_scalar_definition() {
-        let mut s = 3u64;
-        let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut unit = crate::testing::uniform(3);
+        let mut rnd = || unit() * 2.0 - 1.0;
         for case in 0..4000 {
             let mut r = [0.0; 40];
             r.iter_mut().for_each(|x| *x = rnd());

@@ -232,13 +232,8 @@ mod tests {
     /// picks, over planes on either side of the origin and directions of either sign.
     #[test]
     fn a_point_origin_bounds_as_its_corners_do() {
-        let mut s = 7u64;
-        let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 8.0
-        };
+        let mut unit = crate::testing::uniform(7);
+        let mut rnd = || (unit() - 0.5) * 8.0;
         for _ in 0..20_000 {
             let row = [rnd() as f32, rnd() as f32, rnd() as f32, rnd() as f32];
             let o = rnd();

@@ -5,13 +5,7 @@ use crate::tracer::intersect::nearest;
 #[test]
 fn hierarchy_finds_exactly_what_the_plain_loop_finds() {
     let mut objects = Vec::new();
-    let mut s = 12345u64;
-    let mut rnd = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rnd = crate::testing::uniform(12345);
     for _ in 0..500 {
         let center = DVec3::new(
             rnd() * 20.0 - 10.0,

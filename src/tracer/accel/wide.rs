@@ -618,13 +618,7 @@ mod tests {
     use super::*;
 
     fn boxes(n: usize) -> Vec<Prim> {
-        let mut s = 1u64;
-        let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = crate::testing::uniform(1);
         (0..n)
             .map(|i| {
                 let c = DVec3::new(rnd(), rnd(), rnd()) * 100.0;
