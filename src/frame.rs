@@ -26,6 +26,9 @@ pub struct Frame {
     pub samples: u64,
     /// All rays cast for the colour: eye, shadow and reflection rays.
     pub rays: u64,
+    /// `to_rgb8`'s bytes when the tracer made them band by band as it finished each, while
+    /// the band was still in cache (see `tracer::render_frame`); `take_rgb8` hands them on.
+    pub(crate) levels8: Option<Vec<u8>>,
 }
 
 /// A frame's compositing passes: each channel's name and its f32 values (row-major from the
@@ -49,6 +52,11 @@ impl Frame {
     pub fn to_rgb8(&self) -> Vec<u8> {
         let len = self.rgb.len() / 3 * if self.alpha.is_some() { 4 } else { 3 };
         self.levels(255.0, spare_bytes(len))
+    }
+
+    /// `to_rgb8`, taking the bytes the tracer already made when it made them.
+    pub(crate) fn take_rgb8(&mut self) -> Vec<u8> {
+        self.levels8.take().unwrap_or_else(|| self.to_rgb8())
     }
 
     /// 16-bit RGB(A) in the frame's encoding.
@@ -81,6 +89,9 @@ impl Frame {
     /// Gives the frame's buffers back for the next frame of the same size: a 1080p frame is
     /// 25 MB, and every fresh page of it costs a page fault.
     pub(crate) fn recycle(self) {
+        if let Some(bytes) = self.levels8 {
+            BYTES.give(bytes);
+        }
         for buffer in std::iter::once(self.rgb)
             .chain(self.depth)
             .chain(self.alpha)
@@ -132,6 +143,19 @@ pub(crate) fn buffer(len: usize) -> Vec<f32> {
 /// A byte buffer of length `len` if one is spare, else an empty one to be grown.
 fn spare_bytes(len: usize) -> Vec<u8> {
     BYTES.take(len).unwrap_or_default()
+}
+
+/// A buffer for `to_rgb8`'s bytes of `len` values (alpha-free frames), recycled when one is
+/// spare; `levels8` fills it a slice at a time.
+pub(crate) fn bytes8(len: usize) -> Vec<u8> {
+    let mut bytes = spare_bytes(len);
+    bytes.resize(len, 0);
+    bytes
+}
+
+/// `to_rgb8`'s bytes of a slice of an alpha-free frame's colour values.
+pub(crate) fn levels8(rgb: &[f32], out: &mut [u8], encoding: Encoding) {
+    encode_slice(rgb, out, 255.0, encoding);
 }
 
 /// Gives back bytes that were written out (a stream's frame), for the next `to_rgb8`.
@@ -271,6 +295,7 @@ mod tests {
             non_finite: 0,
             samples: 2,
             rays: 2,
+            levels8: None,
         };
         assert_eq!(f.to_rgb8(), vec![0, 128, 255, 0, 255, 51]);
         assert_eq!(f.to_rgb16()[1], 32768);
@@ -293,6 +318,7 @@ mod tests {
                     non_finite: 0,
                     samples: 1,
                     rays: 1,
+                    levels8: None,
                 };
                 let fresh = f.to_rgb8();
                 for len in [12, 16] {
@@ -324,6 +350,7 @@ mod tests {
                 non_finite: 0,
                 samples: 0,
                 rays: 0,
+                levels8: None,
             };
             let _ = (f.to_rgb8(), f.to_rgb16());
             let mut best = [f64::MAX; 2];

@@ -353,7 +353,7 @@ fn render_tile(
             .collect(),
         motion: exposure.motion.clone(),
     };
-    tracer::render_or_stop(world, &turned, &settings, n, stop).map(|f| f.map(|_| ()))
+    tracer::render_or_stop(world, &turned, &settings, n, stop, false).map(|f| f.map(|_| ()))
 }
 
 /// `c` turned towards the centre of `tile` of a `s.width` × `s.height` frame, its field of
@@ -381,7 +381,7 @@ fn aimed(c: &Camera, s: &Settings, tile: Tile) -> Camera {
 fn encode_seconds(seq: &Sequence, format: &FileFormat, n: u64) -> f64 {
     let s = &seq.settings;
     let pixels = (s.width * s.height) as usize;
-    let frame = crate::frame::Frame {
+    let mut frame = crate::frame::Frame {
         width: s.width,
         height: s.height,
         rgb: (0..3 * pixels)
@@ -394,11 +394,12 @@ fn encode_seconds(seq: &Sequence, format: &FileFormat, n: u64) -> f64 {
         non_finite: 0,
         samples: 0,
         rays: 0,
+        levels8: None,
     };
     let view = s.frame_view(&seq.timeline, n);
     let meta = RunIdentity::new(seq, format).meta(&view);
     let t = Instant::now();
-    let Ok((bytes, _)) = crate::output::encode_file(&frame, format, &meta) else {
+    let Ok((bytes, _)) = crate::output::encode_file(&mut frame, format, &meta) else {
         return t.elapsed().as_secs_f64();
     };
     let temp = std::env::temp_dir().join(format!(".rayreel-estimate-{}", std::process::id()));

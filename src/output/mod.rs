@@ -25,7 +25,7 @@ use std::path::Path;
 /// The bytes of `frame`'s file in `format`, recording `meta`, and how many colour samples
 /// were beyond the largest half float and hold it instead (EXR half only).
 pub(crate) fn encode_file(
-    frame: &Frame,
+    frame: &mut Frame,
     format: &FileFormat,
     meta: &FrameMeta,
 ) -> Result<(Vec<u8>, u64), EncodeError> {

@@ -11,7 +11,7 @@ use crate::transfer::Encoding;
 use png::{ScaledFloat, SourceChromaticities};
 
 pub(crate) fn encode(
-    frame: &Frame,
+    frame: &mut Frame,
     sixteen_bit: bool,
     compression: Compression,
     text: &[(&str, String)],
@@ -40,7 +40,7 @@ pub(crate) fn encode(
             .collect()
     } else {
         enc.set_depth(png::BitDepth::Eight);
-        frame.to_rgb8()
+        frame.take_rgb8()
     };
     let mut writer = enc.write_header()?;
     writer.write_image_data(&data)?;

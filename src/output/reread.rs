@@ -116,6 +116,7 @@ fn exr_bytes(bytes: &[u8], expected: &Expected, encoding: Encoding) -> Result<Ve
         non_finite: 0,
         samples: 0,
         rays: 0,
+        levels8: None,
     };
     Ok(frame.to_rgb8())
 }

@@ -15,12 +15,12 @@ pub(crate) enum StreamFormat {
 }
 
 pub(crate) fn encode(
-    frame: &Frame,
+    frame: &mut Frame,
     format: StreamFormat,
     sixteen_bit: bool,
 ) -> Result<Vec<u8>, EncodeError> {
     match (format, sixteen_bit) {
-        (StreamFormat::Raw, false) => Ok(frame.to_rgb8()),
+        (StreamFormat::Raw, false) => Ok(frame.take_rgb8()),
         (StreamFormat::Raw, true) => Ok(frame
             .to_rgb16()
             .iter()

@@ -265,8 +265,8 @@ pub(crate) fn render_seeded(
     let exposure =
         (view.exposure.as_ref()).map_err(|&source| RunError::Camera { frame: n, source })?;
     let never = std::sync::atomic::AtomicBool::new(false);
-    let mut frame =
-        tracer::render_or_stop(world, exposure, settings, seed, &never)?.expect("never stopped");
+    let mut frame = tracer::render_or_stop(world, exposure, settings, seed, &never, false)?
+        .expect("never stopped");
     if !settings.aov.is_empty() {
         frame.aov = tracer::aov::render(
             &world.at_frame(exposure),

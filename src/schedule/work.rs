@@ -82,8 +82,14 @@ impl Renderer {
         let exposure =
             (view.exposure.as_ref()).map_err(|&source| RunError::Camera { frame: n, source })?;
         let settings = &self.seq.settings;
-        let Some(mut frame) =
-            tracer::render_or_stop(&self.world, exposure, settings, n, &self.cancel)?
+        let Some(mut frame) = tracer::render_or_stop(
+            &self.world,
+            exposure,
+            settings,
+            n,
+            &self.cancel,
+            self.wants8(),
+        )?
         else {
             return Ok(None);
         };
@@ -98,12 +104,27 @@ impl Renderer {
         Ok(Some(frame))
     }
 
+    /// Whether a sink takes 8-bit levels (`Frame::take_rgb8`): an 8-bit PNG file or stream,
+    /// or a raw 8-bit stream.
+    fn wants8(&self) -> bool {
+        let file = self.files.as_ref().is_some_and(|(files, _)| {
+            matches!(
+                files.format,
+                output::FileFormat::Png {
+                    sixteen_bit: false,
+                    ..
+                }
+            )
+        });
+        file || self.stream.is_some_and(|(_, sixteen)| !sixteen)
+    }
+
     /// `frame`'s bytes for each sink that wants them.
     fn encode(
         &self,
         task: Task,
         view: &FrameView,
-        frame: Frame,
+        mut frame: Frame,
         start: Instant,
     ) -> Result<Encoded, RunError> {
         let n = task.frame;
@@ -111,7 +132,7 @@ impl Renderer {
             Some((files, identity)) => {
                 let meta = identity.meta(view);
                 let path = files.frame_path(n);
-                let (bytes, clamped) = output::encode_file(&frame, &files.format, &meta)
+                let (bytes, clamped) = output::encode_file(&mut frame, &files.format, &meta)
                     .map_err(|source| RunError::Encode { path, source })?;
                 (Some(bytes), clamped)
             }
@@ -119,7 +140,7 @@ impl Renderer {
         };
         let stream = match self.stream {
             Some((format, sixteen)) => Some(
-                output::stream::encode(&frame, format, sixteen)
+                output::stream::encode(&mut frame, format, sixteen)
                     .map_err(|source| RunError::EncodeStream { frame: n, source })?,
             ),
             None => None,

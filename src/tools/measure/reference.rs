@@ -100,5 +100,6 @@ fn load(file: &Path, settings: &Settings) -> Option<Frame> {
         non_finite: 0,
         samples: u64::from(settings.samples) * len as u64 / 3,
         rays: 0,
+        levels8: None,
     })
 }

@@ -17,8 +17,13 @@ impl Report {
 
     /// The reference as an 8-bit PNG in the frame's encoding, to see what rows were held to.
     pub(crate) fn reference_png(&self) -> Vec<u8> {
-        crate::output::png::encode(&self.reference_frame, false, Compression::Fast, &[])
-            .expect("an 8-bit PNG of a frame in memory")
+        crate::output::png::encode(
+            &mut self.reference_frame.clone(),
+            false,
+            Compression::Fast,
+            &[],
+        )
+        .expect("an 8-bit PNG of a frame in memory")
     }
 
     pub(crate) fn table(&self) -> String {
