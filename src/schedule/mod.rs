@@ -161,6 +161,20 @@ pub(crate) fn worker_pool(threads: usize) -> Result<rayon::ThreadPool, RunError>
         .map_err(|source| RunError::Workers { threads, source })
 }
 
+/// Standard output for frames, written straight to its descriptor: `std::io::stdout()` is
+/// line-buffered, so every frame's megabytes would be searched for a newline (1% of the
+/// talk's f32 stream).
+fn unbuffered_stdout() -> Box<dyn Write + Send> {
+    #[cfg(unix)]
+    {
+        use std::os::fd::AsFd;
+        if let Ok(fd) = std::io::stdout().as_fd().try_clone_to_owned() {
+            return Box::new(std::fs::File::from(fd));
+        }
+    }
+    Box::new(std::io::stdout())
+}
+
 /// `run` on threads already started (claim mode runs several passes on them).
 pub(crate) fn run_on(
     pool: &rayon::ThreadPool,
@@ -179,10 +193,7 @@ pub(crate) fn run_on(
     };
     let window = memory_window(&batch, window, progress)?;
     let (tx, rx) = mpsc::channel::<(u64, Produced)>();
-    let out = batch
-        .stream_out
-        .take()
-        .unwrap_or_else(|| Box::new(std::io::stdout()));
+    let out = batch.stream_out.take().unwrap_or_else(unbuffered_stdout);
     let mut d = Delivery::new(&batch, progress, out);
     let renderer = renderer(&batch, &d.cancel, tx)?;
     let mut pending = batch.tasks.iter().copied();
