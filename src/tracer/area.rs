@@ -11,6 +11,7 @@ use super::shade::{Here, Surface, Tints, shine, towards};
 use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
 use crate::scene::Light;
 use glam::DVec3;
+use std::cell::RefCell;
 
 /// An area light (sphere or rect) of index `index` in the scene's lights, after its ambient
 /// term: its m = `samples` points j = 0 … m − 1 in order, each lit as a point light whose
@@ -46,11 +47,11 @@ pub(super) fn light<V: Lanes>(
         _ => active,
     };
     let fallback;
-    let (seeds, k) = match seeds {
-        Some(l) => (l.seeds, l.k),
+    let (seeds, k, discs) = match seeds {
+        Some(l) => (l.seeds, l.k, Some(l.discs)),
         None => {
             fallback = [super::sample::light_seed(0, 0); MAX_LANES];
-            (&fallback, 0)
+            (&fallback, 0, None)
         }
     };
     let points = AreaPoints::new::<V>(light, index, seeds, at.point, lit);
@@ -75,13 +76,109 @@ pub(super) fn light<V: Lanes>(
     let share = Some(V::splat(1.0 / f64::from(m)));
     let tints = Tints::new(s, &i);
     let mut q = [[0.0; MAX_LANES]; 3];
+    // The points' coordinates on the light's domain depend only on the lanes' pixels, the
+    // sample and the light: made once a sample where the packet keeps them, they serve every
+    // surface its paths visit and every station of a mesh; the same values either way.
+    let mut table = match discs {
+        Some(d) if m <= Discs::MAX_POINTS && keeps() => Some(d.table.borrow_mut()),
+        _ => None,
+    };
+    let kept = match &mut table {
+        Some(t) => {
+            let at = t.find::<V::F64>(&points, (index, k, m), V::N);
+            Some(&t.entries[at].1[..m as usize])
+        }
+        None => None,
+    };
     // Points k·m … k·m + m − 1 of the sequence.
     let mut sequence = super::sample::Points02::at(k * m);
-    for _ in 0..m {
-        points.place::<V::F64>(sequence.words(), V::N, &mut q);
-        sequence.advance();
+    let mut one = [[0.0; MAX_LANES]; 2];
+    for j in 0..m as usize {
+        let c = match kept {
+            Some(kept) => &kept[j],
+            None => {
+                points.coords::<V::F64>(sequence.words(), V::N, &mut one);
+                sequence.advance();
+                &one
+            }
+        };
+        points.place::<V::F64>(c, V::N, &mut q);
         let (l, d) = towards(at.point, V3::load(&q, 0));
         shine(world, s, at, (lit, seen), (l, d), &tints, share, sum, rays);
+    }
+}
+
+/// Whether packets keep their points' coordinates: always, but tests turn it off to check
+/// that keeping them changes no byte (the switch changes only how fast other tests run).
+#[cfg(not(test))]
+#[inline(always)]
+fn keeps() -> bool {
+    true
+}
+
+#[cfg(test)]
+pub(super) static KEEP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
+
+#[cfg(test)]
+fn keeps() -> bool {
+    KEEP.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Each point's coordinates on its light's domain for every lane of a packet (`Coords`).
+type Coords = [[f64; MAX_LANES]; 2];
+
+/// The coordinates of the area lights' points a packet's sample takes (`AreaPoints::coords`),
+/// kept while the sample's paths are traced: the lights' indices and each one's points in
+/// order. Cleared for each sample; its buffers stay for the packet's next one.
+#[derive(Default)]
+pub struct Discs {
+    table: RefCell<Table>,
+}
+
+#[derive(Default)]
+struct Table {
+    /// Entries in use: (light index, its points' coordinates); those past it are spare.
+    used: usize,
+    entries: Vec<(usize, Vec<Coords>)>,
+}
+
+impl Discs {
+    /// Lights of more points recompute them at each surface: a packet keeping 64 of 32 lanes
+    /// holds 32 KiB, about what the cache nearest the core has.
+    const MAX_POINTS: u32 = 64;
+
+    /// Forgets the last sample's points.
+    pub fn clear(&self) {
+        self.table.borrow_mut().used = 0;
+    }
+}
+
+impl Table {
+    /// The entry of light `index` for sample `k` of `m` points a sample, made if the sample
+    /// has none yet.
+    #[inline(always)]
+    fn find<W: Lanes>(
+        &mut self,
+        points: &AreaPoints,
+        (index, k, m): (usize, u32, u32),
+        n: usize,
+    ) -> usize {
+        if let Some(at) = self.entries[..self.used].iter().position(|e| e.0 == index) {
+            return at;
+        }
+        if self.used == self.entries.len() {
+            self.entries.push((index, Vec::new()));
+        }
+        let entry = &mut self.entries[self.used];
+        entry.0 = index;
+        entry.1.resize(m as usize, [[0.0; MAX_LANES]; 2]);
+        let mut sequence = super::sample::Points02::at(k * m);
+        for c in entry.1.iter_mut() {
+            points.coords::<W>(sequence.words(), n, c);
+            sequence.advance();
+        }
+        self.used += 1;
+        self.used - 1
     }
 }
 
@@ -129,11 +226,11 @@ impl AreaPoints {
         lit: V::M,
     ) -> AreaPoints {
         let mut lanes = lit.bits();
+        // Every lane's shift, lit or not: the coordinates a packet keeps (`Discs`) serve lanes
+        // that later surfaces light.
         let mut shift = [[0; MAX_LANES]; 2];
         for (k, seed) in seeds.iter().enumerate().take(V::N) {
-            if lanes >> k & 1 == 1 {
-                (shift[0][k], shift[1][k]) = super::sample::light_shift(*seed, index);
-            }
+            (shift[0][k], shift[1][k]) = super::sample::light_shift(*seed, index);
         }
         let shape = match *light {
             Light::Rect {
@@ -166,18 +263,34 @@ impl AreaPoints {
         }
     }
 
-    /// The point of each lane's sequence whose words (`sobol02` of its index) are
-    /// `(gx, gy)` on the light into `out`, for lanes 0 … lanes − 1 (the light's centre or
-    /// corner on lanes that take no points), computed in the f64 lanes `W`, `W::N` lanes at a
-    /// time.
+    /// Each lane's coordinates on the light's domain of the point of its sequence whose words
+    /// (`sobol02` of its index) are `(gx, gy)`, for lanes 0 … lanes − 1: the shifted
+    /// fractions (x, y) for a rect, their concentric map (α, β) for a sphere; computed in the
+    /// f64 lanes `W`, `W::N` lanes at a time.
     #[inline(always)]
-    fn place<W: Lanes>(&self, (gx, gy): (u32, u32), lanes: usize, out: &mut Axes) {
+    fn coords<W: Lanes>(&self, (gx, gy): (u32, u32), lanes: usize, out: &mut Coords) {
         use super::sample::unit32;
         for c in (0..lanes).step_by(W::N) {
-            let live = W::M::from_bits(self.lanes >> c);
             // The sequence's coordinates: integer work, lane by lane.
             let x = W::from_fn(|k| unit32(gx ^ self.shift[0][c + k]));
             let y = W::from_fn(|k| unit32(gy ^ self.shift[1][c + k]));
+            let (x, y) = match &self.shape {
+                AreaShape::Rect { .. } => (x, y),
+                AreaShape::Sphere { .. } => super::lens::disc(x, y),
+            };
+            x.store(&mut out[0][c..]);
+            y.store(&mut out[1][c..]);
+        }
+    }
+
+    /// The points on the light whose coordinates are `coords` (`coords`) into `out`, for lanes
+    /// 0 … lanes − 1 (the light's centre or corner on lanes that take no points), computed in
+    /// the f64 lanes `W`, `W::N` lanes at a time.
+    #[inline(always)]
+    fn place<W: Lanes>(&self, coords: &Coords, lanes: usize, out: &mut Axes) {
+        for c in (0..lanes).step_by(W::N) {
+            let live = W::M::from_bits(self.lanes >> c);
+            let (x, y) = (W::load(&coords[0][c..]), W::load(&coords[1][c..]));
             let (p, idle) = match &self.shape {
                 AreaShape::Rect {
                     corner,
@@ -194,9 +307,8 @@ impl AreaPoints {
                     basis,
                 } => {
                     let (e1, e2) = (V3::load(&basis[0], c), V3::load(&basis[1], c));
-                    let (a, b) = super::lens::disc(x, y);
                     let center = V3::splat(*center);
-                    (center + (e1 * a + e2 * b) * W::splat(*radius), center)
+                    (center + (e1 * x + e2 * y) * W::splat(*radius), center)
                 }
             };
             V3::select(live, p, idle).store(out, c);

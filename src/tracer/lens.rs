@@ -15,7 +15,8 @@ pub(super) fn disc<V: Lanes>(a: V, b: V) -> (V, V) {
     let (a, b) = (two * a - one, two * b - one);
     let wide = b.max(zero - b).lt(a.max(zero - a));
     let r = V::select(wide, a, b);
-    let x = V::splat(std::f64::consts::FRAC_PI_4) * V::select(wide, b / a, a / b);
+    // One division a lane: the branch's quotient (b′/a′ or a′/b′) of the operands it picks.
+    let x = V::splat(std::f64::consts::FRAC_PI_4) * (V::select(wide, b, a) / V::select(wide, a, b));
     let (sin, cos) = sin_cos(x);
     let centre = a.eq(zero).and(b.eq(zero));
     (

@@ -595,3 +595,61 @@ lights:
         }
     }
 }
+
+#[cfg(test)]
+mod discs_tests {
+    use super::*;
+    use crate::sequence;
+    use std::path::Path;
+
+    /// A sphere light and a one-sided rect light over mirrors, glass and a floor partly behind
+    /// the rect's plane (lanes its first surfaces leave unlit that later ones light), seen
+    /// through a lens so that paths branch.
+    const SCENE: &str = "
+render: { width: 47, height: 29, samples: 3, max_depth: 4 }
+camera: { position: [0, 0.4, 2.2], look_at: [0, 0, 0], fov: 70, aperture: 0.05, focus_distance: 2.2 }
+materials:
+  mirror: { diffuse: [0.2, 0.2, 0.2], specular: [1, 1, 1], shininess: 40, reflection: 0.6 }
+  floor: { diffuse: [0.7, 0.7, 0.6], specular: [0.3, 0.3, 0.3], shininess: 20, reflection: 0.3 }
+  glass: { diffuse: [0, 0, 0], specular: [1, 1, 1], shininess: 300, transmission: [0.9, 0.95, 1], ior: 1.5, fresnel: true }
+objects:
+  - sphere: { center: [-0.5, 0, 0], radius: 0.45, material: mirror }
+  - sphere: { center: [0.55, -0.1, 0.2], radius: 0.35, material: glass }
+  - plane: { point: [0, -0.45, 0], normal: [0, 1, 0], material: floor }
+lights:
+  - sphere: { center: [2, 3, 2], radius: 0.6, diffuse: [0.8, 0.8, 0.8], specular: [1, 1, 1], samples: 7 }
+  - rect: { corner: [-1, 1.5, -1], edge_u: [0, 0, 2.5], edge_v: [0, 1.5, 0], diffuse: [0.5, 0.4, 0.3], specular: [0.5, 0.5, 0.5], samples: 5 }
+";
+
+    /// The points' coordinates a packet keeps for its sample's paths give every byte the
+    /// recomputed ones give, in both precisions.
+    #[test]
+    fn kept_light_points_change_no_byte() {
+        let seq = sequence::parse(Path::new("discs.yaml"), SCENE).unwrap();
+        let world = World::new(seq.scene.clone());
+        let exposure = Exposure::of_frame(&seq.timeline, None, 0).unwrap();
+        let never = AtomicBool::new(false);
+        for precision in [Precision::F32, Precision::F64] {
+            let settings = Settings {
+                precision,
+                ..seq.settings
+            };
+            let render = |keep| {
+                area::KEEP.store(keep, Ordering::Relaxed);
+                let f = render_frame(
+                    Kernel::chosen(),
+                    &world,
+                    &exposure,
+                    &settings,
+                    0,
+                    &never,
+                    false,
+                );
+                area::KEEP.store(true, Ordering::Relaxed);
+                f.unwrap().unwrap()
+            };
+            let (kept, made) = (render(true), render(false));
+            assert_eq!(kept.rgb, made.rgb, "{precision:?}");
+        }
+    }
+}

@@ -6,6 +6,7 @@
 
 use super::World;
 use super::accel::{FromOrigin, Rays};
+use super::area::Discs;
 use super::intersect::Ray;
 use super::shade::{NEGLIGIBLE_WEIGHT, shade_hit};
 use super::sky::Background;
@@ -36,6 +37,8 @@ pub struct Eye<'a, V: Lanes> {
 pub struct LightSeeds<'a> {
     pub seeds: &'a [u64; MAX_LANES],
     pub k: u32,
+    /// The points' coordinates this sample's paths share (`area::Discs`, cleared for it).
+    pub discs: &'a Discs,
 }
 
 /// Follows one eye ray through at most `max_depth` surfaces; returns its colour (the one-lane

@@ -5,6 +5,7 @@
 //! one ray at a time, in the same order, and its value cannot depend on the width.
 
 use super::accel::{FromOrigin, Rays};
+use super::area::Discs;
 use super::intersect::Ray;
 use super::path::{self, Eye, LightSeeds};
 use super::sample::{self, Dims, Pattern, Seed};
@@ -342,6 +343,7 @@ fn packet<V: Lanes>(
     // Per lane, with the shutter open: u, v, then the lens's a, b, then the time (a pinhole
     // frame neither needs nor zeroes them).
     let mut film = pass.exposure.map(|_| [[0.0; MAX_LANES]; 5]);
+    let discs = Discs::default();
     for k in (first..end).take_while(|_| !pass.stopped()) {
         let (u, v) = match (&sobol, &seeds, &mut film) {
             (Some(sobol), _, Some(x)) => {
@@ -357,7 +359,14 @@ fn packet<V: Lanes>(
                 [x[4][lane], x[2][lane], x[3][lane]] = dims[lane].at(pattern, k);
             }
         }
-        let lights = light_seeds.as_ref().map(|seeds| LightSeeds { seeds, k });
+        if light_seeds.is_some() {
+            discs.clear();
+        }
+        let lights = light_seeds.as_ref().map(|seeds| LightSeeds {
+            seeds,
+            k,
+            discs: &discs,
+        });
         // While things move under the open shutter, each lane's instant (else None).
         let mut js = None;
         let eye = match (pass.exposure, &film) {
