@@ -329,11 +329,12 @@ fn packet<V: Lanes>(
         true => 0.0,
         false => 2.0 * pass.camera.tan_half_fov / f64::from(s.width) / f64::from(s.samples).sqrt(),
     });
-    // Area lights only: each pixel's light state, for the points its samples take on them.
-    let light_seeds = pass
-        .world
-        .area_lights
-        .then(|| per_lane(V::N, 0, |k| sample::light_seed(pass.frame, pixel(k))));
+    // Area lights only: each pixel's light state, for the points its samples take on them,
+    // and the points' coordinates a sample's paths share (the talk's packets make neither).
+    let area = pass.world.area_lights.then(|| {
+        let seeds = per_lane(V::N, 0, |k| sample::light_seed(pass.frame, pixel(k)));
+        (seeds, Discs::default())
+    });
     let dims = match (pass.exposure, pattern) {
         (Some(_), Pattern::Sobol) | (None, _) => None,
         (Some(_), _) => Some(per_lane(V::N, Dims::new(pattern, 0, 0), |k| {
@@ -343,7 +344,6 @@ fn packet<V: Lanes>(
     // Per lane, with the shutter open: u, v, then the lens's a, b, then the time (a pinhole
     // frame neither needs nor zeroes them).
     let mut film = pass.exposure.map(|_| [[0.0; MAX_LANES]; 5]);
-    let discs = Discs::default();
     for k in (first..end).take_while(|_| !pass.stopped()) {
         let (u, v) = match (&sobol, &seeds, &mut film) {
             (Some(sobol), _, Some(x)) => {
@@ -359,13 +359,9 @@ fn packet<V: Lanes>(
                 [x[4][lane], x[2][lane], x[3][lane]] = dims[lane].at(pattern, k);
             }
         }
-        if light_seeds.is_some() {
+        let lights = area.as_ref().map(|(seeds, discs)| {
             discs.clear();
-        }
-        let lights = light_seeds.as_ref().map(|seeds| LightSeeds {
-            seeds,
-            k,
-            discs: &discs,
+            LightSeeds { seeds, k, discs }
         });
         // While things move under the open shutter, each lane's instant (else None).
         let mut js = None;
