@@ -100,6 +100,13 @@ pub trait Lanes:
     fn splat(x: f64) -> Self;
     /// Lanes from `x[..N]`.
     fn load(x: &[f64]) -> Self;
+    /// Lanes from the integers `x[..N]`, each at most `i32::MAX` (pixel rows and columns):
+    /// rounded as `load` rounds the same integers as f64, so the same lanes, without the
+    /// round trip through an f64 array (its scalar stores stall the vector loads).
+    #[inline(always)]
+    fn from_u32(x: &[u32]) -> Self {
+        Self::from_fn(|k| f64::from(x[k]))
+    }
     /// Lanes into `out[..N]`.
     fn store(self, out: &mut [f64]);
     /// Lanes rounded to f32 (to nearest, as `as f32`) into `out[..N]`.
@@ -243,6 +250,10 @@ impl<L: Lanes> Lanes for Pair<L> {
     #[inline(always)]
     fn load(x: &[f64]) -> Self {
         Pair(L::load(x), L::load(&x[L::N..]))
+    }
+    #[inline(always)]
+    fn from_u32(x: &[u32]) -> Self {
+        Pair(L::from_u32(x), L::from_u32(&x[L::N..]))
     }
     #[inline(always)]
     fn store(self, out: &mut [f64]) {

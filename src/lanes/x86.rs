@@ -37,6 +37,7 @@ macro_rules! x86_lanes {
         min $min:ident, max $max:ident;
         splat |$sx:ident| $splat:expr;
         load |$lx:ident| $load_lanes:expr;
+        integers |$ix:ident| $integers:expr;
         store |$sv:ident, $so:ident| $store:expr;
         store_f32 |$fv:ident, $fo:ident| $store_f32:expr;
         neg |$na:ident| $neg:expr;
@@ -152,6 +153,13 @@ macro_rules! x86_lanes {
                 unsafe { $t($load_lanes) }
             }
             #[inline(always)]
+            fn from_u32(x: &[u32]) -> Self {
+                assert!(x.len() >= $n && x[..$n].iter().all(|&v| v <= i32::MAX as u32));
+                let $ix = x.as_ptr().cast();
+                // SAFETY: the `safety` argument of this expansion; `x` holds the lanes read.
+                unsafe { $t($integers) }
+            }
+            #[inline(always)]
             fn store(self, out: &mut [f64]) {
                 assert!(out.len() >= $n);
                 let ($sv, $so) = (self.0, out);
@@ -262,6 +270,7 @@ x86_lanes! {
     sqrt _mm256_sqrt_pd, min _mm256_min_pd, max _mm256_max_pd;
     splat |x| _mm256_set1_pd(x);
     load |x| _mm256_loadu_pd(x.as_ptr());
+    integers |x| _mm256_cvtepi32_pd(_mm_loadu_si128(x));
     store |v, out| _mm256_storeu_pd(out.as_mut_ptr(), v);
     store_f32 |v, out| _mm_storeu_ps(out.as_mut_ptr(), _mm256_cvtpd_ps(v));
     neg |a| _mm256_xor_pd(a, _mm256_set1_pd(-0.0));
@@ -287,6 +296,7 @@ x86_lanes! {
     sqrt _mm256_sqrt_ps, min _mm256_min_ps, max _mm256_max_ps;
     splat |x| _mm256_set1_ps(x as f32);
     load |x| _mm256_loadu_ps(narrow::<8>(x).as_ptr());
+    integers |x| _mm256_cvtepi32_ps(_mm256_loadu_si256(x));
     store |v, out| {
         let mut lanes = [0f32; 8];
         _mm256_storeu_ps(lanes.as_mut_ptr(), v);
@@ -314,6 +324,7 @@ x86_lanes! {
     sqrt _mm512_sqrt_pd, min _mm512_min_pd, max _mm512_max_pd;
     splat |x| _mm512_set1_pd(x);
     load |x| _mm512_loadu_pd(x.as_ptr());
+    integers |x| _mm512_cvtepi32_pd(_mm256_loadu_si256(x));
     store |v, out| _mm512_storeu_pd(out.as_mut_ptr(), v);
     store_f32 |v, out| _mm256_storeu_ps(out.as_mut_ptr(), _mm512_cvtpd_ps(v));
     neg |a| {
@@ -341,6 +352,7 @@ x86_lanes! {
     sqrt _mm512_sqrt_ps, min _mm512_min_ps, max _mm512_max_ps;
     splat |x| _mm512_set1_ps(x as f32);
     load |x| _mm512_loadu_ps(narrow::<16>(x).as_ptr());
+    integers |x| _mm512_cvtepi32_ps(_mm512_loadu_si512(x));
     store |v, out| {
         let mut lanes = [0f32; 16];
         _mm512_storeu_ps(lanes.as_mut_ptr(), v);
@@ -451,6 +463,25 @@ unsafe fn check_avx512(values: &[f64]) {
 #[inline(always)]
 fn check_width<V: Lanes, S: Lanes<M = bool>>(values: &[f64]) {
     let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+    // Integers to lanes: those exact in f32, those that round in it, and the largest allowed.
+    let ints: Vec<u32> = (0..40u32)
+        .chain([
+            16383,
+            (1 << 24) - 1,
+            (1 << 24) + 1,
+            (1 << 25) + 3,
+            i32::MAX as u32 - 1,
+        ])
+        .chain([i32::MAX as u32])
+        .collect();
+    for chunk in ints.windows(V::N) {
+        let want = V::load(&chunk.iter().map(|&i| f64::from(i)).collect::<Vec<_>>());
+        let got = V::from_u32(chunk);
+        assert!(
+            (0..V::N).all(|k| same(got.lane(k), want.lane(k))),
+            "{chunk:?}"
+        );
+    }
     for chunk_a in values.chunks_exact(V::N) {
         for i in 0..values.len() {
             let a = V::load(chunk_a);

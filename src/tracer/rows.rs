@@ -316,8 +316,7 @@ fn packet<V: Lanes>(
         _ => first,
     };
     let (mut early, mut late) = (V3::<V>::zero(), V3::<V>::zero());
-    let row = V::from_fn(|k| f64::from(px.rows[k]));
-    let col = V::from_fn(|k| f64::from(px.cols[k]));
+    let (row, col) = (V::from_u32(&px.rows), V::from_u32(&px.cols));
     let mut sum = V3::<V>::zero();
     let (mut cover, one, zero) = (V::splat(0.0), V::splat(1.0), V::splat(0.0));
     let (mut lo, mut hi) = (
