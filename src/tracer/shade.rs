@@ -277,7 +277,10 @@ impl<'a, V: Lanes> Surface<'a, V> {
         width: V,
     ) {
         let hits = hit.hit.bits();
-        if !(0..V::N).any(|k| hits >> k & 1 == 1 && self.materials[k].textured()) {
+        let textured = (0..V::N)
+            .filter(|&k| hits >> k & 1 == 1 && self.materials[k].textured())
+            .fold(0u32, |m, k| m | 1 << k);
+        if textured == 0 {
             return;
         }
         let (p, n, d) = (
@@ -291,30 +294,33 @@ impl<'a, V: Lanes> Surface<'a, V> {
             hit.u.array(),
             hit.v.array(),
         );
-        let vec = |a: &[[f64; MAX_LANES]; 3], k: usize| DVec3::new(a[0][k], a[1][k], a[2][k]);
         // Each textured lane's lookups, written into per-lane colours (only the packet's
         // lanes: building a footprint record for all MAX_LANES cost more than the lookups'
-        // bookkeeping).
+        // bookkeeping). Footprints are made four lanes at a time.
         let mut colors = [[DVec3::ZERO; MAX_LANES]; 2];
         let mut painted = [0u32; 2];
-        for k in 0..V::N {
-            let m = self.materials[k];
-            if hits >> k & 1 == 0 || !m.textured() {
+        for first in (0..V::N).step_by(4) {
+            let lanes = textured >> first & 0xf;
+            if lanes == 0 {
                 continue;
             }
-            let at = At {
-                p: vec(&p, k) + world.origin,
-                n: vec(&n, k),
-                d: vec(&d, k),
-                r: 0.5 * width[k],
-                object: object[k] as usize,
-                prim: hit.prim[k],
-                bary: (u[k], v[k]),
-            };
-            for (c, map) in [&m.diffuse_map, &m.ambient_map].into_iter().enumerate() {
-                if let Some(t) = map {
-                    colors[c][k] = texture::color(world, t, &at);
-                    painted[c] |= 1 << k;
+            let fs = texture::footprints((&n, &d, &width), first, lanes);
+            for (j, f) in fs.iter().enumerate() {
+                let Some(f) = f else { continue };
+                let k = first + j;
+                let m = self.materials[k];
+                let at = At {
+                    p: DVec3::new(p[0][k], p[1][k], p[2][k]) + world.origin,
+                    r: 0.5 * width[k],
+                    object: object[k] as usize,
+                    prim: hit.prim[k],
+                    bary: (u[k], v[k]),
+                };
+                for (c, map) in [&m.diffuse_map, &m.ambient_map].into_iter().enumerate() {
+                    if let Some(t) = map {
+                        colors[c][k] = texture::color(world, t, &at, f);
+                        painted[c] |= 1 << k;
+                    }
                 }
             }
         }

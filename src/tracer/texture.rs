@@ -4,8 +4,9 @@
 //! each ray carries its width at its origin and its spread, and its width at a hit is
 //! |width + spread·t|. The rules, operation by operation, are in docs/spec/texture.md.
 //!
-//! Everything here is scalar f64 per lane, from the lanes' values widened exactly, so a lane's
-//! colour is the same for every packet width.
+//! Everything here is f64 per lane, from the lanes' values widened exactly, so a lane's colour
+//! is the same for every packet width: scalar, except the footprints and a checker's taps,
+//! four at a time in AVX2 registers with the scalar rule's operations in its order.
 
 use super::World;
 use crate::lanes::{Lanes, MAX_LANES, Mask, V3};
@@ -14,7 +15,12 @@ use glam::{DVec2, DVec3};
 use std::f64::consts::PI;
 
 #[cfg(target_arch = "x86_64")]
+mod footprint;
+#[cfg(target_arch = "x86_64")]
 mod taps;
+
+/// Per axis, one f64 value per lane.
+pub(super) type Axes = [[f64; MAX_LANES]; 3];
 
 /// The footprint cones of a packet's rays: full width at the origin, and growth per unit
 /// length (radians, small-angle).
@@ -88,9 +94,6 @@ pub(super) fn curvature<V: Lanes>(world: &World, object: V) -> V {
 pub(super) struct At {
     /// The hit point in world coordinates (`p + origin`, see `point`).
     pub p: DVec3,
-    /// The unit normal facing the ray, and the ray's unit direction.
-    pub n: DVec3,
-    pub d: DVec3,
     /// Half the footprint's width at the hit.
     pub r: f64,
     pub object: usize,
@@ -102,17 +105,49 @@ pub(super) struct At {
 /// The texture's colour at `at`, filtered over its footprint: the mean of the lookups at the
 /// footprint's taps.
 #[inline(never)]
-pub(super) fn color(world: &World, texture: &Texture, at: &At) -> DVec3 {
+pub(super) fn color(world: &World, texture: &Texture, at: &At, f: &Footprint) -> DVec3 {
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("sse4.1") {
             // SAFETY: the CPU has SSE4.1.
-            return unsafe { color_sse41(world, texture, at) };
+            return unsafe { color_sse41(world, texture, at, f) };
         }
-        color_with::<Portable>(world, texture, at)
+        color_with::<Portable>(world, texture, at, f)
     }
     #[cfg(not(target_arch = "x86_64"))]
-    color_with::<Native>(world, texture, at)
+    color_with::<Native>(world, texture, at, f)
+}
+
+/// The footprints (`Footprint::new`) of the lanes `first .. first + 4` that are in `lanes`
+/// (bit j for lane first + j), for unit normals `n` facing the rays, unit directions `d` and
+/// cones of full width `width`: four at a time where the CPU has AVX2, the same bits. Lanes
+/// not in `lanes` hold no footprint.
+#[inline(always)]
+pub(super) fn footprints(
+    (n, d, width): (&Axes, &Axes, &[f64; MAX_LANES]),
+    first: usize,
+    lanes: u32,
+) -> [Option<Footprint>; 4] {
+    let one = |j: usize| {
+        let k = first + j;
+        let v = |a: &Axes| DVec3::new(a[0][k], a[1][k], a[2][k]);
+        Footprint::new(v(d), v(n), 0.5 * width[k])
+    };
+    #[cfg(target_arch = "x86_64")]
+    if lanes.count_ones() > 1 && std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2; `first` is a multiple of 4 below MAX_LANES.
+        let (four, redo) = unsafe { footprint::four(n, d, width, first) };
+        let mut four = four.map(Some);
+        for (j, f) in four.iter_mut().enumerate() {
+            *f = match (lanes >> j & 1, redo >> j & 1) {
+                (0, _) => None,
+                (_, 1) => Some(one(j)),
+                _ => f.take(),
+            };
+        }
+        return four;
+    }
+    std::array::from_fn(|j| (lanes >> j & 1 == 1).then(|| one(j)))
 }
 
 /// `color` compiled with SSE4.1, whose rounding instruction is the library's floor and ceil
@@ -123,8 +158,8 @@ pub(super) fn color(world: &World, texture: &Texture, at: &At) -> DVec3 {
 /// The CPU must have SSE4.1.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "sse4.1")]
-unsafe fn color_sse41(world: &World, texture: &Texture, at: &At) -> DVec3 {
-    color_with::<Native>(world, texture, at)
+unsafe fn color_sse41(world: &World, texture: &Texture, at: &At, f: &Footprint) -> DVec3 {
+    color_with::<Native>(world, texture, at, f)
 }
 
 /// How a lookup takes ⌊x⌋: the same bits either way (`floor` is the library's, bit for bit).
@@ -156,11 +191,11 @@ impl Round for Portable {
 /// `color`'s work, every function under it inlined so that it is built with the caller's CPU
 /// features.
 #[inline(always)]
-fn color_with<R: Round>(world: &World, texture: &Texture, at: &At) -> DVec3 {
+fn color_with<R: Round>(world: &World, texture: &Texture, at: &At, f: &Footprint) -> DVec3 {
     let scene = world.unshifted.as_deref().unwrap_or(&world.scene);
     let held = held(scene, at);
     let p = point(scene, at, &held);
-    let mut f = Footprint::of(at);
+    let mut f = *f;
     if let Texture::Checker { size, colors } = texture {
         if let Some(c) = one_cell::<R>(*size, colors, p, &f) {
             return c;
@@ -307,16 +342,18 @@ pub const MAX_TAPS: u32 = 16;
 /// The footprint: the disc of radius r across the ray projected along it onto the tangent
 /// plane, an ellipse with semi-axis vectors `minor` (across the plane of incidence, length r)
 /// and `major` (length r/|cos θ|), covered by `taps` ellipses side by side along `major`.
-struct Footprint {
+#[derive(Clone, Copy)]
+pub(super) struct Footprint {
     minor: DVec3,
     major: DVec3,
     taps: u32,
 }
 
 impl Footprint {
+    /// The footprint at a hit of unit normal `n` (facing the ray) seen along the unit
+    /// direction `d`, for a cone of half-width `r` there.
     #[inline(always)]
-    fn of(at: &At) -> Footprint {
-        let (d, n) = (at.d, at.n);
+    fn new(d: DVec3, n: DVec3, r: f64) -> Footprint {
         let mut m = d.cross(n);
         if m == DVec3::ZERO {
             m = n.cross(DVec3::X);
@@ -326,15 +363,24 @@ impl Footprint {
         }
         let across = m.normalize();
         let e2 = across.cross(d);
-        let minor = across * at.r;
-        let major = (e2 - d * (e2.dot(n) / d.dot(n))) * at.r;
+        let minor = across * r;
+        let major = (e2 - d * (e2.dot(n) / d.dot(n))) * r;
         let ratio = (major.length() / minor.length()).ceil();
-        let taps = if ratio >= 1.0 {
-            ratio.min(f64::from(MAX_TAPS)) as u32
-        } else {
-            1
-        };
-        Footprint { minor, major, taps }
+        Footprint {
+            minor,
+            major,
+            taps: taps_of(ratio),
+        }
+    }
+}
+
+/// Taps for the ratio ⌈|major| / |minor|⌉: at least 1, at most `MAX_TAPS`.
+#[inline(always)]
+fn taps_of(ratio: f64) -> u32 {
+    if ratio >= 1.0 {
+        ratio.min(f64::from(MAX_TAPS)) as u32
+    } else {
+        1
     }
 }
 
