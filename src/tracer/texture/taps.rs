@@ -24,6 +24,7 @@ pub(super) unsafe fn checker_sum(
     let (p, major) = (line.p.to_array(), line.major.to_array());
     let (c0, c1) = (colors[0].to_array(), colors[1].to_array());
     let mut sum = [0.0f64; 3];
+    let cells = exact_reciprocal(size);
     for first in (0..line.taps).step_by(4) {
         let odd = |j: u32| f64::from(2 * (first + j) + 1);
         let step = _mm256_div_pd(
@@ -43,7 +44,10 @@ pub(super) unsafe fn checker_sum(
                     _mm256_mul_pd(_mm256_set1_pd(major[i]), step),
                 ),
             };
-            let x = _mm256_div_pd(c, _mm256_set1_pd(size));
+            let x = match cells {
+                Some(r) => _mm256_mul_pd(c, _mm256_set1_pd(r)),
+                None => _mm256_div_pd(c, _mm256_set1_pd(size)),
+            };
             a = _mm256_mul_pd(a, square_average(x, half[i]));
         }
         let half_a = _mm256_mul_pd(_mm256_set1_pd(0.5), a);
@@ -79,19 +83,45 @@ fn square_average(x: __m256d, h: f64) -> __m256d {
     let hv = _mm256_set1_pd(h);
     let (a, b) = (_mm256_sub_pd(x, hv), _mm256_add_pd(x, hv));
     let (ka, kb) = (_mm256_floor_pd(a), _mm256_floor_pd(b));
-    let (sa, sb) = (sign(ka), sign(kb));
-    let width = _mm256_sub_pd(b, a);
-    let two_cells = _mm256_div_pd(
-        _mm256_add_pd(
-            _mm256_mul_pd(sa, _mm256_sub_pd(kb, a)),
-            _mm256_mul_pd(sb, _mm256_sub_pd(b, kb)),
-        ),
-        width,
-    );
-    let more = _mm256_div_pd(_mm256_sub_pd(triangle(b), triangle(a)), width);
+    let sa = sign(ka);
     let one_cell = _mm256_cmp_pd::<_CMP_EQ_OQ>(ka, kb);
     let next = _mm256_cmp_pd::<_CMP_EQ_OQ>(kb, _mm256_add_pd(ka, _mm256_set1_pd(1.0)));
-    _mm256_blendv_pd(_mm256_blendv_pd(more, two_cells, next), sa, one_cell)
+    // The lane's case picks one of three values (in one cell: sa; across one boundary:
+    // two_cells; else more); a value no lane picks is not made, which skips its division.
+    let (one, two) = (
+        _mm256_movemask_pd(one_cell),
+        _mm256_movemask_pd(_mm256_andnot_pd(one_cell, next)),
+    );
+    if one == 0xf {
+        return sa;
+    }
+    let width = _mm256_sub_pd(b, a);
+    let mut picked = sa;
+    if one | two != 0xf {
+        let more = _mm256_div_pd(_mm256_sub_pd(triangle(b), triangle(a)), width);
+        picked = _mm256_blendv_pd(more, sa, one_cell);
+    }
+    if two != 0 {
+        let sb = sign(kb);
+        let two_cells = _mm256_div_pd(
+            _mm256_add_pd(
+                _mm256_mul_pd(sa, _mm256_sub_pd(kb, a)),
+                _mm256_mul_pd(sb, _mm256_sub_pd(b, kb)),
+            ),
+            width,
+        );
+        picked = _mm256_blendv_pd(picked, two_cells, _mm256_andnot_pd(one_cell, next));
+    }
+    picked
+}
+
+/// 1/size where dividing by `size` is multiplying by it, bit for bit: a power of two whose
+/// reciprocal is a power of two too (x/2ᵏ and x·2⁻ᵏ are the same real number, rounded once).
+pub(super) fn exact_reciprocal(size: f64) -> Option<f64> {
+    let normal = size.is_normal() && size > 0.0;
+    let power_of_two = size.to_bits() & ((1u64 << 52) - 1) == 0;
+    let r = 1.0 / size;
+    (normal && power_of_two && r.is_normal()).then_some(r)
 }
 
 /// `sign(k)` of whole numbers (or ±∞, NaN): +1 where k − 2⌊k/2⌋ == 0, else −1. k·0.5 is k/2
