@@ -234,10 +234,14 @@ impl<'a, V: Lanes> Surface<'a, V> {
         }
         // Closures below see plain f64 only: a closure is compiled on its own, outside the
         // kernel's `#[target_feature]` function, so lane operations must stay out of it.
+        // Only the packet's lanes: the rest keep the first lane's material and anchor.
         let material = |k: usize| &scene.materials[scene.objects[objects[k]].material];
-        let materials: [&Material; MAX_LANES] = std::array::from_fn(material);
-        let anchors: [(DVec3, DVec3, bool); MAX_LANES] =
-            std::array::from_fn(|k| anchor(scene.objects[objects[k]].shape));
+        let mut materials: [&Material; MAX_LANES] = [material(lead); MAX_LANES];
+        let mut anchors = [anchor(scene.objects[first as usize].shape); MAX_LANES];
+        for k in 0..V::N {
+            materials[k] = material(k);
+            anchors[k] = anchor(scene.objects[objects[k]].shape);
+        }
         let plane_bits = (0..V::N)
             .filter(|&k| anchors[k].2)
             .fold(0, |b, k| b | 1 << k);
