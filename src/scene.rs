@@ -71,6 +71,13 @@ impl Material {
     pub fn textured(&self) -> bool {
         self.diffuse_map.is_some() || self.ambient_map.is_some()
     }
+
+    /// Whether a checker replaces a colour of this material (its eye hits then read their
+    /// pixel's average, docs/spec/texture.md **The pixel**).
+    pub fn checkered(&self) -> bool {
+        let checker = |m: &Option<Texture>| matches!(m, Some(Texture::Checker { .. }));
+        checker(&self.diffuse_map) || checker(&self.ambient_map)
+    }
 }
 
 impl Material {

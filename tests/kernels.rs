@@ -462,9 +462,18 @@ timeline:
         "render: { max_depth: 5 }",
         "render: { max_depth: 5, shutter: 180 }",
     );
-    std::fs::write(tmp.join("seq.yaml"), blurred).unwrap();
+    std::fs::write(tmp.join("seq.yaml"), &blurred).unwrap();
     let blur = ["--size", "81x45", "--samples", "3", "--frames", "5"];
     every_kernel_equals_scalar(&tmp, "texture-blur", &blur);
+    // A lens too: each lane's pixel seen from its own lens point at its own instant.
+    let lens = blurred.replacen(
+        "fov: 60 }",
+        "fov: 60, aperture: 0.08, focus_distance: 4 }",
+        1,
+    );
+    assert!(lens.contains("aperture"));
+    std::fs::write(tmp.join("seq.yaml"), lens).unwrap();
+    every_kernel_equals_scalar(&tmp, "texture-lens", &blur);
     // Under an image sky (the globe, turned), seen directly, in the mirror and through glass.
     let sky = seq.replace(
         "render: { max_depth: 5 }",

@@ -14,7 +14,7 @@ use super::texture::Cone;
 use super::{Settings, World, shade};
 use crate::camera::{Camera, screen_point};
 pub use crate::frame::Passes;
-use crate::lanes::{F64x1, V3};
+use crate::lanes::{F64x1, MAX_LANES, V3};
 use crate::scene::{Object, Scene, Shape, turned};
 use crate::settings::Aov;
 use crate::shutter::Next;
@@ -128,6 +128,12 @@ fn pixel(
         };
         Cone::<F64x1>::eye(spread).at(hit.t)
     });
+    // A checker reads the pixel's average, as the frame's eye hits do.
+    let pixel = world.checkered().then(|| {
+        let at = (F64x1(f64::from(row)), F64x1(f64::from(col)));
+        super::rows::pixel_rays((w, h), at, &[camera; MAX_LANES], None)
+    });
+    let width = width.map(|c| (c, pixel.as_ref()));
     let (n, albedo) = shade::first_surface(world, &ray, &hit, width);
     let p = (ray.origin + ray.dir * hit.t).lane(0);
     let [u, v] = match next {

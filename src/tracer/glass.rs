@@ -253,8 +253,9 @@ pub(super) fn trace_tree<V: Lanes>(
             if !hit.hit.any() {
                 continue;
             }
+            let pixel = if depth == 0 { eye.pixel } else { None };
             let width = if textured {
-                Some(b.cone.at(hit.t))
+                Some((b.cone.at(hit.t), pixel))
             } else {
                 None
             };

@@ -181,6 +181,12 @@ impl World {
         }
     }
 
+    /// Whether eye rays carry their pixels (`texture::PixelRays`): some material has a checker
+    /// and textures are filtered.
+    pub(crate) fn checkered(&self) -> bool {
+        self.textured && !self.point_sampled && self.scene.materials.iter().any(|m| m.checkered())
+    }
+
     /// This world with textures looked up at points, unfiltered: what `bench` and the tests
     /// compare filtering against.
     pub fn point_sampled(self) -> World {

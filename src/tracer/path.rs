@@ -10,7 +10,7 @@ use super::area::Discs;
 use super::intersect::Ray;
 use super::shade::{NEGLIGIBLE_WEIGHT, shade_hit};
 use super::sky::Background;
-use super::texture::{self, Cone};
+use super::texture::{self, Cone, PixelRays};
 use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
 use glam::DVec3;
 
@@ -25,6 +25,9 @@ pub struct Eye<'a, V: Lanes> {
     pub transparent: bool,
     /// The eye rays' footprint spread (radians) when the scene has textures (`texture::Cone`).
     pub footprint: Option<f64>,
+    /// Each lane's pixel, where the scene has a checker and filters textures: a checker at
+    /// the eye rays' first hits is averaged over it (`texture::PixelRays`).
+    pub pixel: Option<&'a PixelRays<V>>,
     /// Which points each lane takes on area lights: set only when the scene has some (None
     /// stands for pixel 0 of frame 0, sample 0, in every lane).
     pub lights: Option<LightSeeds<'a>>,
@@ -54,6 +57,7 @@ pub fn trace(world: &World, eye: Ray, max_depth: u32) -> DVec3 {
         from_origin: None,
         transparent: false,
         footprint: world.textured.then_some(0.0),
+        pixel: None,
         lights: None,
     };
     trace_packet(world, &eye, max_depth, &mut 0).0.lane(0)
@@ -120,9 +124,10 @@ fn follow<V: Lanes>(world: &World, eye: &Eye<V>, max_depth: u32, rays: &mut u64)
         if !active.any() {
             break;
         }
+        let pixel = if depth == 0 { eye.pixel } else { None };
         #[allow(clippy::manual_map)]
         let width = match &cone {
-            Some(c) => Some(c.at(hit.t)),
+            Some(c) => Some((c.at(hit.t), pixel)),
             None => None,
         };
         let at = shade_hit(world, &ray, &hit, eye.lights, rays, width);

@@ -10,6 +10,7 @@ use super::intersect::Ray;
 use super::path::{self, Eye, LightSeeds};
 use super::sample::{self, Dims, Pattern, Seed};
 use super::sobol;
+use super::texture::PixelRays;
 use super::{Sampler, Samples, Settings, World, finite};
 use super::{adaptive, lens};
 use crate::camera::{Camera, screen_points};
@@ -328,6 +329,24 @@ fn packet<V: Lanes>(
         true => 0.0,
         false => 2.0 * pass.camera.tan_half_fov / f64::from(s.width) / f64::from(s.samples).sqrt(),
     });
+    // A checker's eye hits read their pixel's average: a pinhole's pixels are the same for
+    // every sample, a lens's and a moving camera's are made with each sample's rays.
+    // Boxed and lent: on the stack (and moved into every sample's `Eye`) they cost the talk,
+    // which has none, a larger frame and a 600-byte copy a sample.
+    let checkered = pass.world.checkered();
+    let pinhole_pixels = match checkered && pass.exposure.is_none() {
+        true => Some(Box::new(pixel_rays(
+            (s.width, s.height),
+            (row, col),
+            &[pass.camera; MAX_LANES],
+            None,
+        ))),
+        false => None,
+    };
+    let mut film_pixels = match checkered && pass.exposure.is_some() {
+        true => Some(Box::new(PixelRays::<V>::zero())),
+        false => None,
+    };
     // Area lights only: each pixel's light state, for the points its samples take on them,
     // and the points' coordinates a sample's paths share (the talk's packets make neither).
     let area = pass.world.area_lights.then(|| {
@@ -365,26 +384,29 @@ fn packet<V: Lanes>(
         // While things move under the open shutter, each lane's instant (else None).
         let mut js = None;
         let eye = match (pass.exposure, &film) {
-            (Some(exposure), Some(x)) => Eye {
-                rays: {
-                    if !pass.instants.is_empty() {
-                        js = Some(std::array::from_fn(|k| instant(x[4][k]) as u8));
-                    }
-                    sampled_rays(
-                        pass,
-                        exposure,
-                        (row, col),
-                        (u, v),
-                        &x[4],
-                        (V::load(&x[2]), V::load(&x[3])),
-                    )
-                },
-                active: V::M::from_bits(px.valid),
-                from_origin: None,
-                transparent: s.alpha,
-                footprint,
-                lights,
-            },
+            (Some(exposure), Some(x)) => {
+                if !pass.instants.is_empty() {
+                    js = Some(std::array::from_fn(|k| instant(x[4][k]) as u8));
+                }
+                let rays = sampled_rays(
+                    pass,
+                    exposure,
+                    (row, col),
+                    (u, v),
+                    &x[4],
+                    (V::load(&x[2]), V::load(&x[3])),
+                    film_pixels.as_deref_mut(),
+                );
+                Eye {
+                    rays,
+                    active: V::M::from_bits(px.valid),
+                    from_origin: None,
+                    transparent: s.alpha,
+                    footprint,
+                    pixel: film_pixels.as_deref(),
+                    lights,
+                }
+            }
             _ => Eye {
                 rays: Rays {
                     origin: V3::splat(pass.camera.origin),
@@ -395,6 +417,7 @@ fn packet<V: Lanes>(
                 from_origin: Some(pass.from_origin),
                 transparent: s.alpha,
                 footprint,
+                pixel: pinhole_pixels.as_deref(),
                 lights,
             },
         };
@@ -568,6 +591,7 @@ fn sampled_rays<V: Lanes>(
     (u, v): (V, V),
     times: &[f64; MAX_LANES],
     (a, b): (V, V),
+    pixels: Option<&mut PixelRays<V>>,
 ) -> Rays<V> {
     let mut cameras = [&exposure.camera; MAX_LANES];
     if !exposure.instants.is_empty() {
@@ -589,6 +613,9 @@ fn sampled_rays<V: Lanes>(
     let radius = V::from_fn(|i| cameras[i].lens_radius);
     let open = V::splat(0.0).lt(radius);
     if !open.any() {
+        if let Some(out) = pixels {
+            *out = pixel_rays((s.width, s.height), (row, col), &cameras, None);
+        }
         return Rays {
             origin,
             dir: pinhole,
@@ -599,10 +626,56 @@ fn sampled_rays<V: Lanes>(
     let (dx, dy) = lens::disc(a, b);
     let lens = origin + right * (radius * dx) + up * (radius * dy);
     let target = origin + w * focus;
-    Rays {
+    let rays = Rays {
         origin: V3::select(open, lens, origin),
         dir: V3::select(open, (target - lens).normalize(), pinhole),
         leaving: V::splat(-1.0),
+    };
+    if let Some(out) = pixels {
+        *out = pixel_rays(
+            (s.width, s.height),
+            (row, col),
+            &cameras,
+            Some((rays.origin, open)),
+        );
+    }
+    rays
+}
+
+/// Each lane's pixel (`texture::PixelRays`, docs/spec/texture.md **The pixel**) as its camera
+/// `cameras[lane]` sees it: w = forward + right·(x·tan) + up·(y·tan) through the pixel's
+/// centre and the steps right·(2/W·tan) and up·(−2/W·tan); where a lane's lens is open
+/// (`lens`: the rays' origins and the open lanes), the centre ray runs from the lane's lens
+/// point to origin + w·focus and the steps are times the focus distance.
+#[inline(always)]
+pub(super) fn pixel_rays<V: Lanes>(
+    (width, height): (u32, u32),
+    (row, col): (V, V),
+    cameras: &[&Camera; MAX_LANES],
+    lens: Option<(V3<V>, V::M)>,
+) -> PixelRays<V> {
+    let half = V::splat(0.5);
+    let (x, y) = screen_points(row, col, half, half, width, height);
+    let tan = V::from_fn(|i| cameras[i].tan_half_fov);
+    let (x, y) = (x * tan, y * tan);
+    let right = V3::from_fn(|i| cameras[i].right);
+    let up = V3::from_fn(|i| cameras[i].up);
+    let w = V3::from_fn(|i| cameras[i].forward) + right * x + up * y;
+    let step = V::splat(2.0 / f64::from(width)) * tan;
+    let (r, d) = (right * step, up * -step);
+    let Some((from, open)) = lens else {
+        return PixelRays {
+            centre: w,
+            right: r,
+            down: d,
+        };
+    };
+    let focus = V::from_fn(|i| cameras[i].focus_distance);
+    let origin = V3::from_fn(|i| cameras[i].origin);
+    PixelRays {
+        centre: V3::select(open, (origin + w * focus) - from, w),
+        right: V3::select(open, r * focus, r),
+        down: V3::select(open, d * focus, d),
     }
 }
 
@@ -637,6 +710,7 @@ fn in_instants<V: Lanes>(
             from_origin: None,
             transparent: eye.transparent,
             footprint: eye.footprint,
+            pixel: eye.pixel,
             lights: eye.lights,
         };
         let world = &pass.instants[usize::from(j)];
@@ -703,6 +777,7 @@ pub(super) fn rays<V: Lanes>(
             from_origin: None,
             transparent: false,
             footprint: world.textured.then_some(0.0),
+            pixel: None,
             lights: None,
         };
         let (c, _) = path::trace_packet(world, &eye, max_depth, &mut cast);

@@ -10,7 +10,7 @@ use super::World;
 use super::accel::{Nearest, Rays};
 use super::path::LightSeeds;
 use super::polygon::MeshLanes;
-use super::texture::{self, At};
+use super::texture::{self, At, Patch, PixelRays};
 use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
 use crate::scene::{Intensity, Light, Material, Shape};
 use glam::DVec3;
@@ -53,7 +53,8 @@ pub(super) struct Shaded<'a, V: Lanes> {
 }
 
 /// Shades the lanes `hit.hit` (at least one) of a packet; `footprint` is the rays' cone
-/// width at the hits when the scene has textures.
+/// width at the hits when the scene has textures, with the eye rays' pixels at their first
+/// hits when it has a checker.
 #[inline(always)]
 pub(super) fn shade_hit<'a, V: Lanes>(
     world: &'a World,
@@ -61,7 +62,7 @@ pub(super) fn shade_hit<'a, V: Lanes>(
     hit: &Nearest<V>,
     seeds: Option<LightSeeds>,
     rays: &mut u64,
-    footprint: Option<V>,
+    footprint: Option<(V, Option<&PixelRays<V>>)>,
 ) -> Shaded<'a, V> {
     let mut surface = Surface::gather(world, hit);
     let point = ray.origin + ray.dir * hit.t;
@@ -76,8 +77,8 @@ pub(super) fn shade_hit<'a, V: Lanes>(
         let at = m.facing(ray.dir, normal, entering);
         (normal, entering, lift, here) = (at.0, at.1, Some(at.2), here.andnot(m.elsewhere()));
     }
-    if let Some(width) = footprint {
-        surface.paint(world, hit, (point, normal, ray.dir), width);
+    if let Some(f) = footprint {
+        surface.paint(world, hit, ray, (point, normal), f);
     }
     // Station 0 lights the hit; on `gouraud` and `constant` lanes stations 1–3 light the
     // vertices and 4 the centroid (`polygon`). One call of `local` keeps the kernels small.
@@ -137,7 +138,7 @@ pub(super) fn first_surface(
     world: &World,
     ray: &Rays<F64x1>,
     hit: &Nearest<F64x1>,
-    width: Option<F64x1>,
+    width: Option<(F64x1, Option<&PixelRays<F64x1>>)>,
 ) -> (DVec3, DVec3) {
     let mut surface = Surface::gather(world, hit);
     let point = ray.origin + ray.dir * hit.t;
@@ -145,10 +146,23 @@ pub(super) fn first_surface(
     if let Some(m) = MeshLanes::of(world, hit, point) {
         normal = m.facing(ray.dir, normal, entering).0;
     }
-    if let Some(width) = width {
-        surface.paint(world, hit, (point, normal, ray.dir), width);
+    if let Some(f) = width {
+        surface.paint(world, hit, ray, (point, normal), f);
     }
     (normal.lane(0), surface.diffuse.lane(0))
+}
+
+/// Lane `k` of `v`.
+#[inline(always)]
+fn lane3<V: Lanes>(v: &V3<V>, k: usize) -> DVec3 {
+    DVec3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k))
+}
+
+/// The lanes of `v`, axis by axis. A function, not a closure: a closure is compiled outside
+/// the kernel's `#[target_feature]` function, its stores then calls.
+#[inline(always)]
+fn axes<V: Lanes>(v: &V3<V>) -> texture::Axes {
+    [v.x.array(), v.y.array(), v.z.array()]
 }
 
 impl<V: Lanes> Shaded<'_, V> {
@@ -271,15 +285,18 @@ impl<'a, V: Lanes> Surface<'a, V> {
     }
 
     /// Replaces the diffuse and ambient colours of the lanes whose material has a texture by
-    /// the texture's, filtered over the footprint of cone width `width`.
+    /// the texture's, filtered over the footprint of cone width `width` (a checker over the
+    /// eye ray's `pixel` where there is one and the rule allows).
     #[inline(always)]
     fn paint(
         &mut self,
         world: &World,
         hit: &Nearest<V>,
-        (p, n, d): (V3<V>, V3<V>, V3<V>),
-        width: V,
+        ray: &Rays<V>,
+        (p, n): (V3<V>, V3<V>),
+        (width, pixel): (V, Option<&PixelRays<V>>),
     ) {
+        let (o, d) = (ray.origin, ray.dir);
         let hits = hit.hit.bits();
         let textured = (0..V::N)
             .filter(|&k| hits >> k & 1 == 1 && self.materials[k].textured())
@@ -287,11 +304,8 @@ impl<'a, V: Lanes> Surface<'a, V> {
         if textured == 0 {
             return;
         }
-        let (p, n, d) = (
-            [p.x.array(), p.y.array(), p.z.array()],
-            [n.x.array(), n.y.array(), n.z.array()],
-            [d.x.array(), d.y.array(), d.z.array()],
-        );
+        let (p, n, d) = (axes(&p), axes(&n), axes(&d));
+
         let (width, object, u, v) = (
             width.array(),
             hit.object.array(),
@@ -313,12 +327,24 @@ impl<'a, V: Lanes> Surface<'a, V> {
                 let Some(f) = f else { continue };
                 let k = first + j;
                 let m = self.materials[k];
+                let v3 = |a: &texture::Axes| DVec3::new(a[0][k], a[1][k], a[2][k]);
+                let hit_at = v3(&p);
+                // The pixel's rays lane by lane: widened whole, they took 3 KB of every shading
+                // frame's stack, textured or not.
+                let patch = match pixel {
+                    Some(q) if m.checkered() => {
+                        let rays = (lane3(&q.centre, k), lane3(&q.right, k), lane3(&q.down, k));
+                        Patch::new(lane3(&o, k), hit_at, v3(&n), rays)
+                    }
+                    _ => None,
+                };
                 let at = At {
-                    p: DVec3::new(p[0][k], p[1][k], p[2][k]) + world.origin,
+                    p: hit_at + world.origin,
                     r: 0.5 * width[k],
                     object: object[k] as usize,
                     prim: hit.prim[k],
                     bary: (u[k], v[k]),
+                    patch,
                 };
                 for (c, map) in [&m.diffuse_map, &m.ambient_map].into_iter().enumerate() {
                     if let Some(t) = map {

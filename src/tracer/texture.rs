@@ -16,6 +16,7 @@ use std::f64::consts::PI;
 
 #[cfg(target_arch = "x86_64")]
 mod footprint;
+mod patch;
 #[cfg(target_arch = "x86_64")]
 mod taps;
 
@@ -100,6 +101,9 @@ pub(super) struct At {
     /// The triangle and its barycentrics (u, v) on a mesh.
     pub prim: u32,
     pub bary: (f64, f64),
+    /// The eye ray's pixel on the hit's tangent plane, at an eye ray's first hit where the
+    /// scene has a checker (else None).
+    pub patch: Option<Patch>,
 }
 
 /// The texture's colour at `at`, filtered over its footprint: the mean of the lookups at the
@@ -116,6 +120,67 @@ pub(super) fn color(world: &World, texture: &Texture, at: &At, f: &Footprint) ->
     }
     #[cfg(not(target_arch = "x86_64"))]
     color_with::<Native>(world, texture, at, f)
+}
+
+/// Each lane's pixel as its eye ray's camera sees it (docs/spec/texture.md, **The pixel**):
+/// the direction from the lane's ray origin through the pixel's centre, unnormalised, and
+/// that direction's steps one pixel right and one pixel down.
+#[derive(Clone, Copy)]
+pub struct PixelRays<V: Lanes> {
+    pub centre: V3<V>,
+    pub right: V3<V>,
+    pub down: V3<V>,
+}
+
+impl<V: Lanes> PixelRays<V> {
+    #[inline(always)]
+    pub(super) fn zero() -> PixelRays<V> {
+        PixelRays {
+            centre: V3::zero(),
+            right: V3::zero(),
+            down: V3::zero(),
+        }
+    }
+}
+
+/// An eye ray's pixel on the tangent plane of its hit: the offset of the centre ray's point
+/// from the hit, and the parallelogram's half-edges (half a pixel's step each way).
+#[derive(Clone, Copy)]
+pub(super) struct Patch {
+    offset: DVec3,
+    a: DVec3,
+    b: DVec3,
+}
+
+impl Patch {
+    /// The pixel (`centre`, `right`, `down` of `PixelRays`, widened) of the eye ray from `o`
+    /// whose hit is `p` with unit normal `n` facing it; None where the centre's ray does not
+    /// meet the plane from the same side, ahead, at a finite point.
+    /// Out of line, like `color`: scalar, once a textured lane, and kept out of shading's body.
+    #[inline(never)]
+    pub(super) fn new(
+        o: DVec3,
+        p: DVec3,
+        n: DVec3,
+        (c, right, down): (DVec3, DVec3, DVec3),
+    ) -> Option<Patch> {
+        let q = n.dot(c);
+        if q.is_nan() || q >= 0.0 {
+            return None;
+        }
+        let t = (p - o).dot(n) / q;
+        if t.is_nan() || t <= 0.0 {
+            return None;
+        }
+        let half = 0.5 * t;
+        let edge = |s: DVec3| (s - c * (s.dot(n) / q)) * half;
+        let patch = Patch {
+            offset: (o + c * t) - p,
+            a: edge(right),
+            b: edge(down),
+        };
+        (patch.offset.is_finite() && patch.a.is_finite() && patch.b.is_finite()).then_some(patch)
+    }
 }
 
 /// The footprints (`Footprint::new`) of the lanes `first .. first + 4` that are in `lanes`
@@ -198,6 +263,12 @@ fn color_with<R: Round>(world: &World, texture: &Texture, at: &At, f: &Footprint
     let p = point(scene, at, &held);
     let mut f = *f;
     if let Texture::Checker { size, colors } = texture {
+        // A `match`, not `and_then`: a closure would be compiled without SSE4.1's floor.
+        if let Some(q) = &at.patch
+            && let Some(c) = pixel::<R>(*size, colors, p, q, &held)
+        {
+            return c;
+        }
         if let Some(c) = one_cell::<R>(*size, colors, p, &f) {
             return c;
         }
@@ -263,6 +334,21 @@ fn one_cell<R: Round>(size: f64, colors: &[DVec3; 2], p: DVec3, f: &Footprint) -
         a *= sign(k);
     }
     Some(if a > 0.0 { colors[0] } else { colors[1] })
+}
+
+/// The checker over the eye ray's pixel `q` around the lookup point `p`: its centre snapped
+/// like every lookup point, the coordinates the surface holds constant held along its edges.
+#[inline(always)]
+fn pixel<R: Round>(
+    size: f64,
+    colors: &[DVec3; 2],
+    p: DVec3,
+    q: &Patch,
+    held: &[Option<f64>; 3],
+) -> Option<DVec3> {
+    let mask = DVec3::from_array(held.map(|h| if h.is_some() { 0.0 } else { 1.0 }));
+    let c = snapped(held, p + q.offset);
+    patch::checker::<R>(size, colors, (c, q.a * mask, q.b * mask))
 }
 
 /// Footprints at least this many cells across (the disc's radius over the cell size) take

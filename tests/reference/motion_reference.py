@@ -531,6 +531,8 @@ class Frame:
         x = -1.0 + (2.0 * (j + u)) / W
         y = ((1.0 - (2.0 * (i + v)) / H) * H) / W
         dd = normalize(mr.add(mr.add(sc.fwd, mr.smul(x * sc.s, sc.right)), mr.smul(y * sc.s, sc.up_c)))
+        if hasattr(sc, "pixel_rays"):  # texture.md "The pixel": this sample's camera's pixel
+            sc.pix = sc.pixel_rays(i, j)
         return sc.trace_tree(sc.pos, dd) if sc.trees else sc.trace(sc.pos, dd)
 
     def render(self):

@@ -277,6 +277,110 @@ def one_cell(P, major, minor, z):
     return A
 
 
+# ---------------------------------------------------------------- texture.md "The pixel"
+def U2(u):
+    n = ffloor(u * 0.5); f = u - 2.0 * n
+    return n + ((0.5 * f) * f) if f < 1 else n + (((2.0 * f - (0.5 * f) * f) - 1.0))
+
+def pix_line(x, a, b):
+    a = abs(a); b = abs(b)
+    if not a >= b:
+        a, b = b, a
+    if b <= a * 2.0 ** -20 or a * b < 2.0 ** -34:
+        return box_avg(x, a)
+    x = x - 2.0 * ffloor(x * 0.5)
+    s = ((U2((x + a) + b) - U2((x + a) - b)) - U2((x - a) + b)) + U2((x - a) - b)
+    return fdiv(s, (4.0 * a) * b)
+
+def pix_edge(p, q):
+    (x0, y0), (x1, y1) = p, q
+    if y1 == y0:
+        return 0.0
+    m = fdiv(x1 - x0, y1 - y0)
+    if not math.isfinite(m):
+        return None
+    up = y1 > y0; row = ffloor(y0); ya, xa, ua = y0, x0, U2(x0); s = 0.0
+    for _ in range(35):
+        bound = row + 1.0 if up else row
+        last = bound >= y1 if up else bound <= y1
+        yb, xb = (y1, x1) if last else (bound, x0 + (bound - y0) * m)
+        ub = U2(xb)
+        piece = tri(0.5 * (xa + xb)) * (yb - ya) if abs(m) < 2.0 ** -20 else fdiv(ub - ua, m)
+        s = s + sgn(row) * piece
+        if last:
+            return s
+        ya, xa, ua = yb, xb, ub
+        row = row + 1.0 if up else row - 1.0
+    return None
+
+def pix_area(X, Y, hy):
+    (cx, ax, bx), (cy, ay, by) = X, Y
+    k = ax * by - ay * bx
+    if not abs(k) >= ((abs(ax) + abs(ay)) * (abs(bx) + abs(by))) * 2.0 ** -10 or abs(k) < 2.0 ** -34:
+        return None
+    if ffloor(cy + hy) - ffloor(cy - hy) > 32:
+        return None
+    cx = cx - 2.0 * ffloor(cx * 0.5); cy = cy - 2.0 * ffloor(cy * 0.5)
+    p = [((cx - ax) - bx, (cy - ay) - by), ((cx + ax) - bx, (cy + ay) - by),
+         ((cx + ax) + bx, (cy + ay) + by), ((cx - ax) + bx, (cy - ay) + by)]
+    s = 0.0
+    for i in range(4):
+        e = pix_edge(p[i], p[(i + 1) % 4])
+        if e is None:
+            return None
+        s = s + e
+    return fdiv(s, 4.0 * k)
+
+def pixel_patch(o, p, n, pix):
+    """The eye ray's pixel on the tangent plane at p: (Δ, a, b), or None."""
+    c, rt, dn = pix
+    q = dot(n, c)
+    if not q < 0:
+        return None
+    t = fdiv(dot(sub(p, o), n), q)
+    if not t > 0:
+        return None
+    h = 0.5 * t
+    D = sub(add(o, vmul(c, t)), p)
+    a = vmul(sub(rt, vmul(c, fdiv(dot(rt, n), q))), h)
+    b = vmul(sub(dn, vmul(c, fdiv(dot(dn, n), q))), h)
+    if not all(math.isfinite(v) for v in D + a + b):
+        return None
+    return D, a, b
+
+def pixel_checker(C, a, b, z, colors):
+    x = [fdiv(C[i], z) for i in range(3)]
+    h = [fdiv(abs(a[i]) + abs(b[i]), z) for i in range(3)]
+    held = 1.0; vary = []
+    for i in range(3):
+        if h[i] < 1e-12:
+            held = held * sgn(ffloor(x[i])); continue
+        k = ffloor(x[i] - h[i])
+        if k == ffloor(x[i] + h[i]):
+            held = held * sgn(k)
+        else:
+            vary.append(i)
+    cells = lambda i: (x[i], fdiv(a[i], z), fdiv(b[i], z))
+    if not vary:
+        M = held
+    elif len(vary) == 1:
+        M = held * pix_line(*cells(vary[0]))
+    elif len(vary) == 2:
+        i, j = vary
+        X, Y = (i, j) if h[i] >= h[j] else (j, i)
+        r = pix_area(cells(X), cells(Y), h[Y])
+        if r is None:
+            return None
+        M = held * r
+    else:
+        return None
+    if not math.isfinite(M):
+        return None
+    M = min(max(M, -1.0), 1.0)
+    c0, c1 = colors
+    return tuple(c0[c] * (0.5 + 0.5 * M) + c1[c] * (0.5 - 0.5 * M) for c in range(3))
+
+
 # ---------------------------------------------------------------- meshes keep their texture coordinates
 class TexMeshFile(mr.MeshFile):
     def build(self, pos, nrm, tex, corners_faces):
@@ -352,9 +456,22 @@ class TexScene(mr.Scene):
                     x = -1.0 + (2.0 * (j + u)) / W
                     y = ((1.0 - (2.0 * (i + v)) / H) * H) / W
                     dd = normalize(add(add(self.fwd, mr.smul(x * self.s, self.right)), mr.smul(y * self.s, self.up_c)))
+                    self.pix = self.pixel_rays(i, j)
                     acc = add(acc, self.trace_tree(self.pos, dd) if self.trees else self.trace(self.pos, dd))
                 img[i, j] = acc if self.samples == 1 else sdiv(acc, float(self.samples))
         return img
+
+    def pixel_rays(self, i, j):
+        """texture.md "The pixel": the pixel centre's direction and its steps right and down."""
+        if not any(mp[0] == 'checker' for o in self.spheres + self.planes + self.meshes
+                   for mp in o['m']['maps'].values()):
+            return None
+        W, H = float(self.W), float(self.H)
+        x = -1.0 + (2.0 * (j + 0.5)) / W
+        y = ((1.0 - (2.0 * (i + 0.5)) / H) * H) / W
+        c = add(add(self.fwd, mr.smul(x * self.s, self.right)), mr.smul(y * self.s, self.up_c))
+        step = (2.0 / W) * self.s
+        return c, vmul(self.right, step), vmul(self.up_c, -step)
 
     @staticmethod
     def material(m):
@@ -390,7 +507,7 @@ class TexScene(mr.Scene):
         N = S if ob['shading'] in ('phong', 'gouraud') else G
         return neg(N) if back else N
 
-    def textured(self, kind, ob, extra, P_hit, N, d, Wd):
+    def textured(self, kind, ob, extra, P_hit, N, d, Wd, o=None, pix=None):
         mat = ob['m']
         if not mat['maps']:
             return mat
@@ -439,6 +556,16 @@ class TexScene(mr.Scene):
             mp = mat['maps'].get(key)
             if mp is None:
                 continue
+            if mp[0] == 'checker' and pix is not None:  # texture.md "The pixel"
+                pt = pixel_patch(o, P_hit, N, pix)
+                if pt is not None:
+                    D, a_, b_ = pt
+                    held_axes = [i for i, _ in snaps]
+                    keep = lambda v: tuple(0.0 if i in held_axes else v[i] for i in range(3))
+                    val = pixel_checker(snap(add(P, D)), keep(a_), keep(b_), mp[1], mp[2])
+                    if val is not None:
+                        out[mkey] = val
+                        continue
             if mp[0] == 'checker':
                 cell = one_cell(P, major, minor, mp[1])
                 if cell is not None:  # texture.md "One cell": the footprint's box in one cell
@@ -530,12 +657,13 @@ class TexScene(mr.Scene):
                 N0 = normalize(sub(P, ob['c'])) if kind == 'sphere' else ob['n']
                 entering = not (dot(N0, d) > 0)
                 N = neg(N0) if dot(N0, d) > 0 else N0
-                mat = self.textured(kind, ob, None, P, N, d, Wd)
+                mat = self.textured(kind, ob, None, P, N, d, Wd, o, self.pix if depth == 0 else None)
                 local = self.light_sum(P, N, d, mat, lambda r: P, ob)
                 next_origin = lambda r: P
                 next_leaving = ob
             else:
-                mat = self.textured(kind, ob, extra, P, self.mesh_normal(ob, extra, d), d, Wd)
+                mat = self.textured(kind, ob, extra, P, self.mesh_normal(ob, extra, d), d, Wd, o,
+                                    self.pix if depth == 0 else None)
                 local, N, G, delta = self.mesh_surface(dict(ob, m=mat), extra, P, t, d, o)
                 entering = True
                 next_origin = self.lifted(P, G, delta)
@@ -574,11 +702,12 @@ class TexScene(mr.Scene):
                     N0 = normalize(sub(P, ob['c'])) if kind == 'sphere' else ob['n']
                     entering = not (dot(N0, d) > 0)
                     N = neg(N0) if dot(N0, d) > 0 else N0
-                    mat = self.textured(kind, ob, None, P, N, d, Wd)
+                    mat = self.textured(kind, ob, None, P, N, d, Wd, o, self.pix if lv == 0 else None)
                     local = self.light_sum(P, N, d, mat, lambda r: P, ob)
                     origin = (lambda P: (lambda r: P))(P); lv_obj = ob
                 else:
-                    mat = self.textured(kind, ob, extra, P, self.mesh_normal(ob, extra, d), d, Wd)
+                    mat = self.textured(kind, ob, extra, P, self.mesh_normal(ob, extra, d), d, Wd, o,
+                                        self.pix if lv == 0 else None)
                     local, N, G, delta, back = self.mesh_surface(dict(ob, m=mat), extra, P, t, d, o, want_back=True)
                     entering = not back
                     origin = self.lifted(P, G, delta); lv_obj = None

@@ -1,7 +1,9 @@
 //! `rayreel bench --only texture`: what footprint filtering buys on the classic moiré test, a
 //! checker floor running to the horizon seen from low above it (1280×720; `--quick` 320×180).
-//! Each frame is compared with a many-sample reference of the same frame (1024 samples;
-//! `--quick` 64), filtered and point-sampled, at one sample and at default sampling.
+//! Each frame is compared with a many-sample reference of the same frame (1024 point samples a
+//! pixel, `--quick` 64: the pixel's true mean, which the filter at the eye would otherwise
+//! carry into its own reference), filtered and point-sampled, at one sample and at default
+//! sampling.
 
 use super::{BenchError, Options, load, render_only};
 use crate::frame::Frame;
@@ -37,11 +39,11 @@ pub(super) fn textures(
         }
         seq
     };
-    let (_, reference) = render_only(&world, &with(many, false), cores, 1)?;
+    let (_, reference) = render_only(&point, &with(many, false), cores, 1)?;
     let one = with(1, false);
     let default = with(base.settings.samples, true);
     let mut line = format!(
-        "texture checker floor to the horizon {}x{}, PSNR of sRGB values against {many} samples:",
+        "texture checker floor to the horizon {}x{}, PSNR of sRGB values against {many} point samples:",
         size.0, size.1
     );
     for (name, seq) in [("1 sample", &one), ("default sampling", &default)] {
