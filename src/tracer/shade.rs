@@ -322,9 +322,14 @@ impl<'a, V: Lanes> Surface<'a, V> {
             if lanes == 0 {
                 continue;
             }
-            let fs = texture::footprints((&n, &d, &width), first, lanes);
-            for (j, f) in fs.iter().enumerate() {
-                let Some(f) = f else { continue };
+            // Each lane's hit as lookups see it, and first a checker's mean over the eye ray's
+            // pixel: a lane whose every map that answers needs no footprint.
+            let mut ats: [Option<At>; 4] = [None, None, None, None];
+            let mut left = 0u32;
+            for (j, slot) in ats.iter_mut().enumerate() {
+                if lanes >> j & 1 == 0 {
+                    continue;
+                }
                 let k = first + j;
                 let m = self.materials[k];
                 let v3 = |a: &texture::Axes| DVec3::new(a[0][k], a[1][k], a[2][k]);
@@ -347,8 +352,35 @@ impl<'a, V: Lanes> Surface<'a, V> {
                     patch,
                 };
                 for (c, map) in [&m.diffuse_map, &m.ambient_map].into_iter().enumerate() {
-                    if let Some(t) = map {
-                        colors[c][k] = texture::color(world, t, &at, f);
+                    let Some(t) = map else { continue };
+                    match at.patch.is_some() {
+                        true => match texture::pixel_color(world, t, &at) {
+                            Some(colour) => {
+                                colors[c][k] = colour;
+                                painted[c] |= 1 << k;
+                            }
+                            None => left |= 1 << j,
+                        },
+                        false => left |= 1 << j,
+                    }
+                }
+                *slot = Some(at);
+            }
+            if left == 0 {
+                continue;
+            }
+            let fs = texture::footprints((&n, &d, &width), first, left);
+            for (j, (f, at)) in fs.iter().zip(&ats).enumerate() {
+                let (Some(f), Some(at)) = (f, at) else {
+                    continue;
+                };
+                let k = first + j;
+                let m = self.materials[k];
+                for (c, map) in [&m.diffuse_map, &m.ambient_map].into_iter().enumerate() {
+                    if let Some(t) = map
+                        && painted[c] >> k & 1 == 0
+                    {
+                        colors[c][k] = texture::color(world, t, at, f);
                         painted[c] |= 1 << k;
                     }
                 }

@@ -228,6 +228,44 @@ unsafe fn color_sse41(world: &World, texture: &Texture, at: &At, f: &Footprint) 
     color_with::<Native>(world, texture, at, f)
 }
 
+/// The checker `texture`'s mean over the eye ray's pixel (`at.patch`), or None where the rule
+/// leaves the lookup to `color` and the footprint: an image map, no pixel, or a parallelogram
+/// the closed forms do not hold. Tried first, so a lane it answers needs no footprint.
+#[inline(never)]
+pub(super) fn pixel_color(world: &World, texture: &Texture, at: &At) -> Option<DVec3> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("sse4.1") {
+            // SAFETY: the CPU has SSE4.1.
+            return unsafe { pixel_sse41(world, texture, at) };
+        }
+        pixel_color_with::<Portable>(world, texture, at)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    pixel_color_with::<Native>(world, texture, at)
+}
+
+/// `pixel_color` compiled with SSE4.1, as `color_sse41`.
+///
+/// # Safety
+/// The CPU must have SSE4.1.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "sse4.1")]
+unsafe fn pixel_sse41(world: &World, texture: &Texture, at: &At) -> Option<DVec3> {
+    pixel_color_with::<Native>(world, texture, at)
+}
+
+#[inline(always)]
+fn pixel_color_with<R: Round>(world: &World, texture: &Texture, at: &At) -> Option<DVec3> {
+    let (Texture::Checker { size, colors }, Some(q)) = (texture, &at.patch) else {
+        return None;
+    };
+    let scene = world.unshifted.as_deref().unwrap_or(&world.scene);
+    let held = held(scene, at);
+    let p = point(scene, at, &held);
+    pixel::<R>(*size, colors, p, q, &held)
+}
+
 /// How a lookup takes ⌊x⌋: the same bits either way (`floor` is the library's, bit for bit).
 trait Round {
     fn floor(x: f64) -> f64;
@@ -263,12 +301,6 @@ fn color_with<R: Round>(world: &World, texture: &Texture, at: &At, f: &Footprint
     let p = point(scene, at, &held);
     let mut f = *f;
     if let Texture::Checker { size, colors } = texture {
-        // A `match`, not `and_then`: a closure would be compiled without SSE4.1's floor.
-        if let Some(q) = &at.patch
-            && let Some(c) = pixel::<R>(*size, colors, p, q, &held)
-        {
-            return c;
-        }
         if let Some(c) = one_cell::<R>(*size, colors, p, &f) {
             return c;
         }
