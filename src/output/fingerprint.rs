@@ -389,9 +389,10 @@ impl Canon for Material {
 impl Canon for Texture {
     fn canon(&self, h: &mut Hasher) {
         match self {
-            // Tag 2 since eye hits read the pixel's average (0 before: checker frames
-            // written then count as stale once).
-            Texture::Checker { size, colors } => tagged(h, 2, &[size, colors]),
+            // Tag 3 since adaptive marks skip pixels smooth on one object (2 since eye hits
+            // read the pixel's average, 0 before): checker frames written under an earlier
+            // rule count as stale once.
+            Texture::Checker { size, colors } => tagged(h, 3, &[size, colors]),
             Texture::Image { image, scale } => {
                 let scale = [scale.x, scale.y];
                 tagged(h, 1, &[&image.digest, &scale])

@@ -16,7 +16,8 @@ use std::cell::RefCell;
 /// An area light (sphere or rect) of index `index` in the scene's lights, after its ambient
 /// term: its m = `samples` points j = 0 … m − 1 in order, each lit as a point light whose
 /// term is scaled by 1/m. Each lane's points are computed in f64 from the lane's own surface
-/// point and pixel, so they do not depend on the packet.
+/// point and pixel, so they do not depend on the packet. Returns the lanes of `active` it did
+/// not reach whole: left out (behind a rect, inside a sphere) or dark at some point.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn light<V: Lanes>(
@@ -28,7 +29,7 @@ pub(super) fn light<V: Lanes>(
     seeds: Option<LightSeeds>,
     sum: &mut V3<V>,
     rays: &mut u64,
-) {
+) -> V::M {
     let (i, m) = match *light {
         Light::Sphere {
             intensity, samples, ..
@@ -57,7 +58,7 @@ pub(super) fn light<V: Lanes>(
     let points = AreaPoints::new::<V>(light, index, seeds, at.point, lit);
     let lit = lit.and(V::M::from_bits(points.lanes));
     if !lit.any() {
-        return;
+        return active;
     }
     // Lanes whose cone towards the light meets no opaque object trace no shadow ray.
     // `match`, not `Option::map`: a closure is compiled outside the kernel's
@@ -73,6 +74,7 @@ pub(super) fn light<V: Lanes>(
         )),
         None => None,
     };
+    let mut dark = active.andnot(lit);
     let share = Some(V::splat(1.0 / f64::from(m)));
     let tints = Tints::new(s, &i);
     let mut q = [[0.0; MAX_LANES]; 3];
@@ -104,8 +106,10 @@ pub(super) fn light<V: Lanes>(
         };
         points.place::<V::F64>(c, V::N, &mut q);
         let (l, d) = towards(at.point, V3::load(&q, 0));
-        shine(world, s, at, (lit, seen), (l, d), &tints, share, sum, rays);
+        let unlit = shine(world, s, at, (lit, seen), (l, d), &tints, share, sum, rays);
+        dark = dark.or(unlit);
     }
+    dark
 }
 
 /// Whether packets keep their points' coordinates: always, but tests turn it off to check

@@ -187,6 +187,12 @@ impl World {
         self.textured && !self.point_sampled && self.scene.materials.iter().any(|m| m.checkered())
     }
 
+    /// Whether a first pass under the adaptive rule records which pixels are smooth on one
+    /// object (docs/spec/tracer.md, *Smooth pixels*): a checker, filtered, and no trees.
+    pub(crate) fn tracks_smooth(&self) -> bool {
+        self.checkered() && !self.branches
+    }
+
     /// This world with textures looked up at points, unfiltered: what `bench` and the tests
     /// compare filtering against.
     pub fn point_sampled(self) -> World {
@@ -315,6 +321,9 @@ fn render_frame(
         sampled && settings.samples > 1 && (settings.adaptive.is_some() || settings.denoise);
     let recorded = settings.adaptive.is_some() || rounds;
     let mut spread = vec![0f32; if recorded { w * h } else { 0 }];
+    // Second differences along smooth checker pixels are not tested (`mark`).
+    let smooth = settings.adaptive.is_some() && !rounds && !sampled && world.tracks_smooth();
+    let mut smooth_on = vec![rows::NOT_SMOOTH; if smooth { w * h } else { 0 }];
     let first = Pass {
         world,
         camera,
@@ -326,6 +335,7 @@ fn render_frame(
         from_origin: &from_origin,
         instants,
         stop,
+        smooth,
     };
     let mut planes = Planes {
         rgb: &mut rgb,
@@ -341,16 +351,24 @@ fn render_frame(
         stops: settings.exposure,
         levels8: levels8.as_deref_mut(),
     });
-    let mut stats = run_pass(kernel, &first, &mut planes, &mut spread, finish);
+    let mut stats = run_pass(
+        kernel,
+        &first,
+        &mut planes,
+        (&mut spread, &mut smooth_on),
+        finish,
+    );
     if let (Some(a), true) = (settings.adaptive, first.rounds) {
         stats = stats + adaptive::rounds(kernel, &first, a, &mut planes, &mut spread);
     } else if let Some(a) = settings.adaptive {
-        let marked = mark(planes.rgb, &spread, w, h, a.threshold);
+        let smooth_on = smooth.then_some(&smooth_on[..]);
+        let marked = mark(planes.rgb, (&spread, smooth_on), w, h, a.threshold);
         let more = Pass {
             samples: Samples::More {
                 have: settings.samples,
                 total: a.max_samples,
             },
+            smooth: false,
             ..first
         };
         let marked: Vec<u32> = (0..marked.len() as u32)
@@ -427,18 +445,20 @@ struct Finish<'a> {
 }
 
 /// Runs `pass` over every band of rows in parallel; fills `spread` (when not empty) with each
-/// pixel's largest channel range, and finishes each band with `finish` when given.
+/// pixel's largest channel range and `smooth` (when not empty) with the object each pixel is
+/// smooth on, and finishes each band with `finish` when given.
 fn run_pass(
     kernel: Kernel,
     pass: &Pass,
     planes: &mut Planes,
-    spread: &mut [f32],
+    (spread, smooth): (&mut [f32], &mut [u32]),
     finish: Option<Finish>,
 ) -> RowStats {
     let rows = kernel.band_rows(pass.settings.precision);
     let w = pass.settings.width as usize;
     let bands = (pass.settings.height as usize).div_ceil(rows);
     let mut spreads = in_bands((!spread.is_empty()).then_some(spread), w * rows, bands);
+    let mut smooths = in_bands((!smooth.is_empty()).then_some(smooth), w * rows, bands);
     let mut alphas = in_bands(planes.alpha.as_deref_mut(), w * rows, bands);
     let stops = finish.as_ref().map(|f| f.stops);
     let mut levels = in_bands(finish.and_then(|f| f.levels8), 3 * w * rows, bands);
@@ -448,12 +468,14 @@ fn run_pass(
         .zip(spreads.par_iter_mut())
         .zip(alphas.par_iter_mut())
         .zip(levels.par_iter_mut())
+        .zip(smooths.par_iter_mut())
         .enumerate()
-        .map(|(band, (((rgb, spread), alpha), levels))| {
+        .map(|(band, ((((rgb, spread), alpha), levels), smooth))| {
             let out = RowOut {
                 rgb: &mut *rgb,
                 spread: spread.as_deref_mut(),
                 alpha: alpha.as_deref_mut(),
+                smooth: smooth.as_deref_mut(),
             };
             let stats = kernel.band(pass, (band * rows) as u32, out);
             if let Some(stops) = stops.filter(|&s| s != 0.0) {
@@ -512,12 +534,26 @@ fn expose(rgb: &mut [f32], stops: f64) {
 
 /// Pixels that need more samples: their own samples disagree, or they stand out from their
 /// neighbours along a row or column (a second difference, so smooth shading gradients, which
-/// antialiasing cannot improve, are left alone while edges and thin features are caught).
-fn mark(rgb: &[f32], spread: &[f32], w: usize, h: usize, threshold: f32) -> Vec<bool> {
+/// antialiasing cannot improve, are left alone while edges and thin features are caught),
+/// except across pixels `smooth` on one object (docs/spec/tracer.md, *Smooth pixels*).
+fn mark(
+    rgb: &[f32],
+    (spread, smooth): (&[f32], Option<&[u32]>),
+    w: usize,
+    h: usize,
+    threshold: f32,
+) -> Vec<bool> {
+    // Three pixels smooth on one object differ only by smooth shading and a checker's exact
+    // pixel means: their second difference is not an edge more samples would resolve.
+    let exempt = |a: usize, i: usize, b: usize| match smooth {
+        Some(s) => s[i] != rows::NOT_SMOOTH && s[a] == s[i] && s[b] == s[i],
+        None => false,
+    };
     let bumps = |a: usize, i: usize, b: usize| {
-        (0..3).any(|c| {
-            (2.0 * rgb[3 * i + c] - rgb[3 * a + c] - rgb[3 * b + c]).abs() > 2.0 * threshold
-        })
+        !exempt(a, i, b)
+            && (0..3).any(|c| {
+                (2.0 * rgb[3 * i + c] - rgb[3 * a + c] - rgb[3 * b + c]).abs() > 2.0 * threshold
+            })
     };
     (0..w * h)
         .into_par_iter()
@@ -657,5 +693,46 @@ lights:
             let (kept, made) = (render(true), render(false));
             assert_eq!(kept.rgb, made.rgb, "{precision:?}");
         }
+    }
+}
+
+#[cfg(test)]
+mod mark_tests {
+    use super::*;
+
+    /// A 5×3 grey frame whose middle row has a bright pixel at column 2: second differences
+    /// mark it and its row neighbours unless their triples are smooth on one object.
+    fn frame() -> Vec<f32> {
+        let mut rgb = vec![0.5f32; 3 * 5 * 3];
+        rgb[3 * (5 + 2)..][..3].copy_from_slice(&[0.9, 0.9, 0.9]);
+        rgb
+    }
+
+    #[test]
+    fn smooth_triples_on_one_object_skip_the_second_difference() {
+        let (rgb, spread) = (frame(), vec![0f32; 15]);
+        let marked = |smooth: Option<&[u32]>| mark(&rgb, (&spread, smooth), 5, 3, 0.03);
+        let plain = marked(None);
+        assert!(plain[5 + 1] && plain[5 + 2] && plain[5 + 3], "{plain:?}");
+        // Every pixel smooth on object 4: nothing is marked.
+        let all = vec![4u32; 15];
+        assert!(marked(Some(&all)).iter().all(|&m| !m));
+        // Column 3 smooth on another object: the row triples through it are tested again
+        // (centred on columns 2 and 3 of the middle row); column 1's stays exempt.
+        let mut other = all.clone();
+        for row in 0..3 {
+            other[5 * row + 3] = 7;
+        }
+        let m = marked(Some(&other));
+        assert!(m[5 + 2] && m[5 + 3] && !m[5 + 1], "{m:?}");
+        // A pixel smooth on no object is tested.
+        let mut none = all.clone();
+        none[5 + 1] = rows::NOT_SMOOTH;
+        let m = marked(Some(&none));
+        assert!(m[5 + 1] && m[5 + 2] && !m[5 + 3], "{m:?}");
+        // The spread rule is unchanged.
+        let mut spread = spread.clone();
+        spread[0] = 0.5;
+        assert!(mark(&rgb, (&spread, Some(&all)), 5, 3, 0.03)[0]);
     }
 }

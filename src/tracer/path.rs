@@ -5,13 +5,14 @@
 //! pixels' light seeds when it has area lights (`area`).
 
 use super::World;
-use super::accel::{FromOrigin, Rays};
+use super::accel::{FromOrigin, Nearest, Rays};
 use super::area::Discs;
 use super::intersect::Ray;
 use super::shade::{NEGLIGIBLE_WEIGHT, shade_hit};
 use super::sky::Background;
 use super::texture::{self, Cone, PixelRays};
 use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
+use crate::scene::Shape;
 use glam::DVec3;
 
 /// A packet of eye rays: `active` lanes carry a ray; `from_origin` is set when they all start
@@ -73,21 +74,64 @@ pub fn trace_packet<V: Lanes>(
     max_depth: u32,
     rays: &mut u64,
 ) -> (V3<V>, V::M) {
+    // The pair, not `Traced`, out of the outlined call: its other fields are then dead.
     V::outlined(
         #[inline(always)]
-        || follow(world, eye, max_depth, rays),
+        || {
+            let t = follow::<V, false>(world, eye, max_depth, rays);
+            (t.color, t.covered)
+        },
     )
 }
 
+/// `trace_packet` that also says which lanes' samples are smooth on the object their eye
+/// ray hit (docs/spec/tracer.md, *Smooth pixels*), for worlds that `tracks_smooth`.
 #[inline(always)]
-fn follow<V: Lanes>(world: &World, eye: &Eye<V>, max_depth: u32, rays: &mut u64) -> (V3<V>, V::M) {
+pub(super) fn trace_smooth<V: Lanes>(
+    world: &World,
+    eye: &Eye<V>,
+    max_depth: u32,
+    rays: &mut u64,
+) -> Traced<V> {
+    V::outlined(
+        #[inline(always)]
+        || follow::<V, true>(world, eye, max_depth, rays),
+    )
+}
+
+/// What a packet's paths found: each lane's colour, the lanes whose eye ray hit something,
+/// and (only when asked for) the lanes smooth on `object`, their eye rays' first objects.
+pub(super) struct Traced<V: Lanes> {
+    pub color: V3<V>,
+    pub covered: V::M,
+    pub smooth: V::M,
+    pub object: V,
+}
+
+/// The paths of a packet; with `SMOOTH`, also which lanes are smooth (a separate copy of the
+/// walk, so frames that do not ask pay nothing for it).
+#[inline(always)]
+fn follow<V: Lanes, const SMOOTH: bool>(
+    world: &World,
+    eye: &Eye<V>,
+    max_depth: u32,
+    rays: &mut u64,
+) -> Traced<V> {
     if world.branches {
         // Out of line: inlined here, the tree doubled the packet function, and its compile
         // time (superlinear in a function's size) with it; a call per packet costs nothing.
-        return V::outlined(
+        let (color, covered) = V::outlined(
             #[inline(always)]
             || super::glass::trace_tree(world, eye, max_depth, rays),
         );
+        // Trees make no pixel smooth.
+        let (smooth, object) = (V::M::none_set(), V::splat(-1.0));
+        return Traced {
+            color,
+            covered,
+            smooth,
+            object,
+        };
     }
     let background = Background::of(world);
     let mut ray = eye.rays;
@@ -95,6 +139,7 @@ fn follow<V: Lanes>(world: &World, eye: &Eye<V>, max_depth: u32, rays: &mut u64)
     let mut color = V3::zero();
     let mut weight = V::splat(1.0);
     let mut covered = V::M::none_set();
+    let (mut smooth, mut object) = (V::M::none_set(), V::splat(-1.0));
     // `match`, not `Option::map`: a closure is compiled outside the kernel's
     // `#[target_feature]` function, and lane operations must stay in it.
     #[allow(clippy::manual_map)]
@@ -117,9 +162,17 @@ fn follow<V: Lanes>(world: &World, eye: &Eye<V>, max_depth: u32, rays: &mut u64)
             let seen = background.seen(&ray.dir, missed, spread);
             color = V3::select(missed, color + seen * weight, color);
         }
+        if SMOOTH && depth == 1 {
+            // Clause 4: the reflection leaves into a constant background.
+            smooth = match world.scene.sky {
+                None => smooth.andnot(hit.hit),
+                Some(_) => smooth.andnot(active),
+            };
+        }
         active = hit.hit;
         if depth == 0 {
             covered = hit.hit;
+            object = hit.object;
         }
         if !active.any() {
             break;
@@ -131,6 +184,9 @@ fn follow<V: Lanes>(world: &World, eye: &Eye<V>, max_depth: u32, rays: &mut u64)
             None => None,
         };
         let at = shade_hit(world, &ray, &hit, eye.lights, rays, width);
+        if SMOOTH && depth == 0 {
+            smooth = smooth_hits(world, &hit, at.surface.meaned).andnot(at.dark);
+        }
         color = V3::select(active, color + at.local * weight, color);
         weight = weight * at.surface.reflection;
         active = active.andnot(weight.lt(V::splat(NEGLIGIBLE_WEIGHT)));
@@ -143,5 +199,23 @@ fn follow<V: Lanes>(world: &World, eye: &Eye<V>, max_depth: u32, rays: &mut u64)
             cone = Some(c.leaving(hit.t, bend, at.entering));
         }
     }
-    (color, covered)
+    Traced {
+        color,
+        covered,
+        smooth,
+        object,
+    }
+}
+
+/// The lanes of `hit` on a sphere or a plane whose every texture took its pixel's mean
+/// (`meaned`, bit k for lane k): clauses 1 and 2 of *Smooth pixels*.
+#[inline(always)]
+fn smooth_hits<V: Lanes>(world: &World, hit: &Nearest<V>, meaned: u32) -> V::M {
+    let (objects, ids) = (&world.scene.objects, hit.object.array());
+    let lanes = hit.hit.bits() & meaned;
+    let bits = (0..V::N)
+        .filter(|&k| lanes >> k & 1 == 1)
+        .filter(|&k| !matches!(objects[ids[k] as usize].shape, Shape::Mesh { .. }))
+        .fold(0u32, |b, k| b | 1 << k);
+    V::M::from_bits(bits)
 }

@@ -41,6 +41,8 @@ pub(super) struct Pass<'a> {
     pub instants: &'a [World],
     /// Set when the frame is no longer wanted: packets and samples not yet begun are skipped.
     pub stop: &'a AtomicBool,
+    /// The pass records which pixels are smooth on one object (`World::tracks_smooth`).
+    pub smooth: bool,
 }
 
 impl Pass<'_> {
@@ -64,7 +66,12 @@ pub(super) struct RowOut<'a> {
     pub rgb: &'a mut [f32],
     pub spread: Option<&'a mut [f32]>,
     pub alpha: Option<&'a mut [f32]>,
+    /// When the pass records it, the object each pixel is smooth on, or `NOT_SMOOTH`.
+    pub smooth: Option<&'a mut [u32]>,
 }
+
+/// A pixel smooth on no object.
+pub(super) const NOT_SMOOTH: u32 = u32::MAX;
 
 #[derive(Debug, Default, Clone, Copy)]
 pub(super) struct RowStats {
@@ -161,17 +168,34 @@ struct Means {
     rgb: [[f32; MAX_LANES]; 3],
     spread: [f32; MAX_LANES],
     alpha: [f32; MAX_LANES],
+    /// Written only by passes that record smooth pixels.
+    smooth: [u32; MAX_LANES],
 }
 
 /// A pass that traces every pixel of a band of `tile_rows(V::N)` rows starting at `top` (the
 /// last band may be shorter), a tile per packet.
 #[inline(always)]
 pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
+    if pass.smooth {
+        // Its own copy, out of line: the smooth-pixel bookkeeping in the one band loop cost
+        // the talk's stream 1–5% in instructions.
+        return V::outlined(
+            #[inline(always)]
+            || band_of::<V, true>(pass, top, out),
+        );
+    }
+    band_of::<V, false>(pass, top, out)
+}
+
+/// `band`; with `SMOOTH`, also recording which pixels are smooth on one object.
+#[inline(always)]
+fn band_of<V: Lanes, const SMOOTH: bool>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
     let w = pass.settings.width;
     let RowOut {
         rgb,
         mut spread,
         mut alpha,
+        mut smooth,
     } = out;
     let rows = (rgb.len() / (3 * w as usize)) as u32;
     let tile_w = (V::N / tile_rows(V::N)) as u32;
@@ -182,14 +206,8 @@ pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
             break;
         }
         let pixels = Pixels::tile::<V>(top, left, rows, w);
-        packet::<V>(
-            pass,
-            &pixels,
-            None,
-            spread.is_some(),
-            &mut stats,
-            &mut means,
-        );
+        let ranges = spread.is_some();
+        packet::<V, SMOOTH>(pass, &pixels, None, ranges, &mut stats, &mut means);
         // Lane k is the tile's pixel (k / tile_w, k % tile_w); those inside the band and
         // the frame are its valid lanes, stored a tile row at a time.
         let cols = tile_w.min(w - left) as usize;
@@ -208,6 +226,9 @@ pub(super) fn band<V: Lanes>(pass: &Pass, top: u32, out: RowOut) -> RowStats {
             }
             if let Some(alpha) = alpha.as_deref_mut() {
                 alpha[start..][..cols].copy_from_slice(&means.alpha[lane..][..cols]);
+            }
+            if SMOOTH && let Some(smooth) = smooth.as_deref_mut() {
+                smooth[start..][..cols].copy_from_slice(&means.smooth[lane..][..cols]);
             }
         }
     }
@@ -250,7 +271,7 @@ pub(super) fn marked<V: Lanes>(
             let a = alpha.map_or(0.0, |a| a[p]);
             [rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2], a]
         });
-        packet::<V>(
+        packet::<V, false>(
             pass,
             &packet_pixels,
             Some(&old),
@@ -270,8 +291,9 @@ pub(super) fn marked<V: Lanes>(
 /// `old` they had (with the samples before this pass) when a pass extends them. Lane k's sum,
 /// range and mean are the scalar ones of its pixel: glam's `DVec3::min`/`max` and
 /// `max_element` compare exactly as the lanes' `min`/`max` do.
+/// With `SMOOTH`, also records which pixels are smooth on one object (`Pass::smooth`).
 #[inline(always)]
-fn packet<V: Lanes>(
+fn packet<V: Lanes, const SMOOTH: bool>(
     pass: &Pass,
     px: &Pixels,
     old: Option<&[[f32; 4]; MAX_LANES]>,
@@ -317,6 +339,8 @@ fn packet<V: Lanes>(
         _ => first,
     };
     let (mut early, mut late) = (V3::<V>::zero(), V3::<V>::zero());
+    // The lanes all of whose samples so far are smooth on the first sample's object.
+    let (mut smooth, mut on) = (V::M::from_bits(px.valid), V::splat(-1.0));
     let (row, col) = (V::from_u32(&px.rows), V::from_u32(&px.cols));
     let mut sum = V3::<V>::zero();
     let (mut cover, one, zero) = (V::splat(0.0), V::splat(1.0), V::splat(0.0));
@@ -422,6 +446,14 @@ fn packet<V: Lanes>(
             },
         };
         let (c, covered) = match &js {
+            None if SMOOTH => {
+                let t = path::trace_smooth(pass.world, &eye, s.max_depth, &mut stats.rays);
+                if k == first {
+                    on = t.object;
+                }
+                smooth = smooth.and(t.smooth).and(t.object.eq(on));
+                (t.color, t.covered)
+            }
             None => path::trace_packet(pass.world, &eye, s.max_depth, &mut stats.rays),
             Some(js) => {
                 let rays = &mut stats.rays;
@@ -486,6 +518,15 @@ fn packet<V: Lanes>(
         mean_of::<V, V>(pass.samples, cover, old_alpha).store_f32(&mut means.alpha);
         if range {
             edge_spread(means, end - first);
+        }
+    }
+    if SMOOTH {
+        let (bits, on) = (smooth.bits(), on.array());
+        for (k, m) in means.smooth.iter_mut().enumerate().take(V::N) {
+            *m = match bits >> k & 1 {
+                1 => on[k] as u32,
+                _ => NOT_SMOOTH,
+            };
         }
     }
     stats.samples += u64::from(end - first) * u64::from(px.valid.count_ones());

@@ -50,6 +50,10 @@ pub(super) struct Shaded<'a, V: Lanes> {
     pub entering: V::M,
     /// The light the surface sends back: the local Blinn-Phong terms of every light.
     pub local: V3<V>,
+    /// Lanes at the hit (station 0) that some light did not reach whole: facing away,
+    /// blocked, or an area light's lane or point left out (docs/spec/tracer.md, *Smooth
+    /// pixels*). Only `path`'s smooth-pixel walk reads it; elsewhere it compiles away.
+    pub dark: V::M,
 }
 
 /// Shades the lanes `hit.hit` (at least one) of a packet; `footprint` is the rays' cone
@@ -89,6 +93,7 @@ pub(super) fn shade_hit<'a, V: Lanes>(
     // The hit's light, and the other stations' only where a mesh needs them: zeroing five
     // vectors of lanes for every hit cost the mesh-free scenes a memset.
     let mut lit0 = V3::zero();
+    let mut dark = V::M::none_set();
     let mut others: Option<[V3<V>; 4]> = None;
     for station in 0..stations {
         let (lanes, p, n, view, at) = match (station, &mesh, &lift) {
@@ -108,9 +113,9 @@ pub(super) fn shade_hit<'a, V: Lanes>(
             object: hit.object,
             lift: at.as_ref().or(lift.as_ref()),
         };
-        let c = local(world, &surface, &here, lanes, seeds, rays);
+        let (c, unlit) = local(world, &surface, &here, lanes, seeds, rays);
         match station {
-            0 => lit0 = c,
+            0 => (lit0, dark) = (c, unlit),
             s => others.get_or_insert([V3::zero(); 4])[s - 1] = c,
         }
     }
@@ -128,6 +133,7 @@ pub(super) fn shade_hit<'a, V: Lanes>(
         normal,
         entering,
         local,
+        dark,
     }
 }
 
@@ -207,6 +213,8 @@ pub(super) struct Surface<'a, V: Lanes> {
     /// Every lane's material has the same specular exponent (and so the same floor): the
     /// lanes' powers are taken together, as for one shared material.
     one_exponent: bool,
+    /// Bit k: lane k's every texture is a checker that took its pixel's mean (`paint`).
+    pub meaned: u32,
 }
 
 impl<'a, V: Lanes> Surface<'a, V> {
@@ -235,6 +243,7 @@ impl<'a, V: Lanes> Surface<'a, V> {
                 materials: [m; MAX_LANES],
                 shared,
                 one_exponent: true,
+                meaned: 0,
             };
         }
         let mut objects = [first as usize; MAX_LANES];
@@ -271,6 +280,7 @@ impl<'a, V: Lanes> Surface<'a, V> {
                 .all(|m| m.exponent.to_bits() == materials[0].exponent.to_bits()),
             materials,
             shared,
+            meaned: 0,
         }
     }
 
@@ -351,6 +361,7 @@ impl<'a, V: Lanes> Surface<'a, V> {
                     bary: (u[k], v[k]),
                     patch,
                 };
+                let left_before = left;
                 for (c, map) in [&m.diffuse_map, &m.ambient_map].into_iter().enumerate() {
                     let Some(t) = map else { continue };
                     match at.patch.is_some() {
@@ -363,6 +374,9 @@ impl<'a, V: Lanes> Surface<'a, V> {
                         },
                         false => left |= 1 << j,
                     }
+                }
+                if left == left_before {
+                    self.meaned |= 1 << k;
                 }
                 *slot = Some(at);
             }
@@ -425,7 +439,8 @@ pub(super) struct Here<'l, V: Lanes> {
     pub lift: Option<&'l Lift<V>>,
 }
 
-/// Sum over the lights of the Blinn-Phong terms at one surface point per lane.
+/// Sum over the lights of the Blinn-Phong terms at one surface point per lane, and the lanes
+/// of `active` some light did not reach whole (see `shine`).
 #[inline(always)]
 pub(super) fn local<V: Lanes>(
     world: &World,
@@ -434,9 +449,10 @@ pub(super) fn local<V: Lanes>(
     active: V::M,
     seeds: Option<LightSeeds>,
     rays: &mut u64,
-) -> V3<V> {
+) -> (V3<V>, V::M) {
     let point = at.point;
     let mut sum = V3::zero();
+    let mut dark = V::M::none_set();
     for (index, light) in world.scene.lights.iter().enumerate() {
         let (to_light, distance, scale, i) = match *light {
             Light::Ambient { color } => {
@@ -477,10 +493,11 @@ pub(super) fn local<V: Lanes>(
                 // Out of line: inlined, the area light's lane code crowded the registers of
                 // every light's loop and cost mesh- and area-free frames 1–2% in instructions.
                 let area = (light, index);
-                V::outlined(
+                let unlit = V::outlined(
                     #[inline(always)]
                     || super::area::light(world, s, at, area, active, seeds, &mut sum, rays),
                 );
+                dark = dark.or(unlit);
                 continue;
             }
         };
@@ -490,7 +507,7 @@ pub(super) fn local<V: Lanes>(
         };
         let ambient = scaled(scale, s.ambient) * V3::splat(i.ambient);
         sum = V3::select(lit_at_all, sum + ambient, sum);
-        shine(
+        let unlit = shine(
             world,
             s,
             at,
@@ -501,14 +518,17 @@ pub(super) fn local<V: Lanes>(
             &mut sum,
             rays,
         );
+        dark = dark.or(unlit);
     }
-    sum
+    (sum, dark)
 }
 
 /// Adds to `sum`, on the lanes of `lit` that face it (N·L > 0, or NaN) and see it past every
 /// opaque object, the diffuse and specular light coming from `to_light` (a unit vector, or 0)
 /// from `distance` away, filtered by glass on the way and scaled by `scale`. Lanes of `seen`,
-/// when given, are known to see it (`cone`): their shadow rays are not traced.
+/// when given, are known to see it (`cone`): their shadow rays are not traced. Returns the
+/// lanes of `lit` it did not reach (facing away or blocked): callers that ignore them pay
+/// nothing, the mask being dead code once inlined.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn shine<V: Lanes>(
@@ -521,13 +541,13 @@ pub(super) fn shine<V: Lanes>(
     scale: Option<V>,
     sum: &mut V3<V>,
     rays: &mut u64,
-) {
+) -> V::M {
     let n_dot_l = at.normal.dot(to_light);
     // Diffuse and specular vanish when N·L ≤ 0: a shadow ray is only worth tracing
     // otherwise (NaN, which never compares ≤, is traced like the scalar code did).
     let facing = lit.andnot(n_dot_l.le(V::splat(0.0)));
     if !facing.any() {
-        return;
+        return lit;
     }
     *rays += facing.count();
     // The lanes `seen` would find nothing: each lane's answer is its own, so leaving them out
@@ -558,6 +578,7 @@ pub(super) fn shine<V: Lanes>(
         let term = scaled(scale, term);
         *sum = V3::select(open, *sum + term, *sum);
     }
+    lit.andnot(open)
 }
 
 /// Shadow rays from the lanes' surface points (lifted off a mesh where it needs) along the
