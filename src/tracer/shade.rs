@@ -10,8 +10,9 @@ use super::World;
 use super::accel::{Nearest, Rays};
 use super::path::LightSeeds;
 use super::polygon::MeshLanes;
-use super::texture::{self, At, Patch, PixelRays};
+use super::texture::{self, At, PixelRays};
 use crate::lanes::{F64x1, Lanes, MAX_LANES, Mask, V3};
+use crate::scene::Texture;
 use crate::scene::{Intensity, Light, Material, Shape};
 use glam::DVec3;
 
@@ -158,10 +159,16 @@ pub(super) fn first_surface(
     (normal.lane(0), surface.diffuse.lane(0))
 }
 
-/// Lane `k` of `v`.
+/// Lanes `first .. first + 4` of `v`, axis by axis (0 past the packet's lanes).
 #[inline(always)]
-fn lane3<V: Lanes>(v: &V3<V>, k: usize) -> DVec3 {
-    DVec3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k))
+fn quad<V: Lanes>(v: &V3<V>, first: usize) -> texture::Quad {
+    quarter(&axes(v), first)
+}
+
+/// Lanes `first .. first + 4` of `a`.
+#[inline(always)]
+fn quarter(a: &texture::Axes, first: usize) -> texture::Quad {
+    a.map(|x| std::array::from_fn(|j| x[first + j]))
 }
 
 /// The lanes of `v`, axis by axis. A function, not a closure: a closure is compiled outside
@@ -306,7 +313,6 @@ impl<'a, V: Lanes> Surface<'a, V> {
         (p, n): (V3<V>, V3<V>),
         (width, pixel): (V, Option<&PixelRays<V>>),
     ) {
-        let (o, d) = (ray.origin, ray.dir);
         let hits = hit.hit.bits();
         let textured = (0..V::N)
             .filter(|&k| hits >> k & 1 == 1 && self.materials[k].textured())
@@ -314,6 +320,25 @@ impl<'a, V: Lanes> Surface<'a, V> {
         if textured == 0 {
             return;
         }
+        let (diffuse, ambient, meaned) =
+            self.lookups(world, hit, ray, (p, n), (width, pixel), textured);
+        (self.diffuse, self.ambient) = (diffuse, ambient);
+        self.meaned |= meaned;
+    }
+
+    /// `paint`'s lookups for the lanes in `textured`: the new diffuse and ambient lanes, and
+    /// the lanes whose every map took the pixel's mean.
+    #[inline(always)]
+    fn lookups(
+        &self,
+        world: &World,
+        hit: &Nearest<V>,
+        ray: &Rays<V>,
+        (p, n): (V3<V>, V3<V>),
+        (width, pixel): (V, Option<&PixelRays<V>>),
+        textured: u32,
+    ) -> (V3<V>, V3<V>, u32) {
+        let (o, d) = (ray.origin, ray.dir);
         let (p, n, d) = (axes(&p), axes(&n), axes(&d));
 
         let (width, object, u, v) = (
@@ -327,6 +352,7 @@ impl<'a, V: Lanes> Surface<'a, V> {
         // bookkeeping). Footprints are made four lanes at a time.
         let mut colors = [[DVec3::ZERO; MAX_LANES]; 2];
         let mut painted = [0u32; 2];
+        let mut meaned = 0u32;
         for first in (0..V::N).step_by(4) {
             let lanes = textured >> first & 0xf;
             if lanes == 0 {
@@ -334,52 +360,63 @@ impl<'a, V: Lanes> Surface<'a, V> {
             }
             // Each lane's hit as lookups see it, and first a checker's mean over the eye ray's
             // pixel: a lane whose every map that answers needs no footprint.
-            let mut ats: [Option<At>; 4] = [None, None, None, None];
-            let mut left = 0u32;
-            for (j, slot) in ats.iter_mut().enumerate() {
-                if lanes >> j & 1 == 0 {
-                    continue;
-                }
+            let checkered = (0..4).fold(0u32, |m, j| {
                 let k = first + j;
-                let m = self.materials[k];
-                let v3 = |a: &texture::Axes| DVec3::new(a[0][k], a[1][k], a[2][k]);
-                let hit_at = v3(&p);
-                // The pixel's rays lane by lane: widened whole, they took 3 KB of every shading
-                // frame's stack, textured or not.
-                let patch = match pixel {
-                    Some(q) if m.checkered() => {
-                        let rays = (lane3(&q.centre, k), lane3(&q.right, k), lane3(&q.down, k));
-                        Patch::new(lane3(&o, k), hit_at, v3(&n), rays)
-                    }
-                    _ => None,
-                };
-                let at = At {
-                    p: hit_at + world.origin,
+                m | u32::from(lanes >> j & 1 == 1 && self.materials[k.min(V::N - 1)].checkered())
+                    << j
+            });
+            let patches = match pixel {
+                Some(q) if checkered != 0 => {
+                    let rays = (
+                        quad(&q.centre, first),
+                        quad(&q.right, first),
+                        quad(&q.down, first),
+                    );
+                    let (p, n) = (quarter(&p, first), quarter(&n, first));
+                    texture::patches(
+                        (&quad(&o, first), &p, &n),
+                        (&rays.0, &rays.1, &rays.2),
+                        checkered,
+                    )
+                }
+                _ => [None; 4],
+            };
+            let ats: [Option<At>; 4] = std::array::from_fn(|j| {
+                let k = first + j;
+                (lanes >> j & 1 == 1).then(|| At {
+                    p: DVec3::new(p[0][k], p[1][k], p[2][k]) + world.origin,
                     r: 0.5 * width[k],
                     object: object[k] as usize,
                     prim: hit.prim[k],
                     bary: (u[k], v[k]),
-                    patch,
+                    patch: patches[j],
+                })
+            });
+            let mut left = 0u32;
+            for c in 0..2 {
+                let maps: [Option<&Texture>; 4] = std::array::from_fn(|j| {
+                    let m = self.materials[(first + j).min(V::N - 1)];
+                    let map = [&m.diffuse_map, &m.ambient_map][c];
+                    map.as_ref().filter(|_| lanes >> j & 1 == 1)
+                });
+                let has = maps.map(|m| m.is_some());
+                let found = match has.contains(&true) && patches.iter().any(Option::is_some) {
+                    true => texture::pixel_colors(world, maps, &ats),
+                    false => [None; 4],
                 };
-                let left_before = left;
-                for (c, map) in [&m.diffuse_map, &m.ambient_map].into_iter().enumerate() {
-                    let Some(t) = map else { continue };
-                    match at.patch.is_some() {
-                        true => match texture::pixel_color(world, t, &at) {
-                            Some(colour) => {
-                                colors[c][k] = colour;
-                                painted[c] |= 1 << k;
-                            }
-                            None => left |= 1 << j,
-                        },
-                        false => left |= 1 << j,
+                for j in 0..4 {
+                    let k = first + j;
+                    match (has[j], found[j]) {
+                        (true, Some(colour)) => {
+                            colors[c][k] = colour;
+                            painted[c] |= 1 << k;
+                        }
+                        (true, None) => left |= 1 << j,
+                        _ => {}
                     }
                 }
-                if left == left_before {
-                    self.meaned |= 1 << k;
-                }
-                *slot = Some(at);
             }
+            meaned |= (lanes & !left) << first;
             if left == 0 {
                 continue;
             }
@@ -401,8 +438,11 @@ impl<'a, V: Lanes> Surface<'a, V> {
             }
         }
         let [diffuse, ambient] = colors;
-        self.diffuse = texture::lanes(painted[0], &diffuse, self.diffuse);
-        self.ambient = texture::lanes(painted[1], &ambient, self.ambient);
+        (
+            texture::lanes(painted[0], &diffuse, self.diffuse),
+            texture::lanes(painted[1], &ambient, self.ambient),
+            meaned,
+        )
     }
 
     /// max(0, N·H)^exponent per lane (see `specular_power`). The floor below which a power is

@@ -18,6 +18,8 @@ use std::f64::consts::PI;
 mod footprint;
 mod patch;
 #[cfg(target_arch = "x86_64")]
+mod pixels;
+#[cfg(target_arch = "x86_64")]
 mod taps;
 
 /// Per axis, one f64 value per lane.
@@ -181,6 +183,99 @@ impl Patch {
         };
         (patch.offset.is_finite() && patch.a.is_finite() && patch.b.is_finite()).then_some(patch)
     }
+}
+
+/// Four lanes' values per axis.
+pub(super) type Quad = [[f64; 4]; 3];
+
+/// The patches (`Patch::new`) of the lanes in `lanes` (bit j for lane j) of four eye rays from
+/// `o` with hits `p`, unit normals `n` facing the rays and pixel rays `(centre, right, down)`:
+/// four at a time where the CPU has AVX2, the same bits.
+#[inline(never)]
+pub(super) fn patches(
+    (o, p, n): (&Quad, &Quad, &Quad),
+    rays: (&Quad, &Quad, &Quad),
+    lanes: u32,
+) -> [Option<Patch>; 4] {
+    #[cfg(target_arch = "x86_64")]
+    if lanes.count_ones() > 1 && std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2.
+        let (four, valid) = unsafe { pixels::patches(o, p, n, rays) };
+        return std::array::from_fn(|j| ((lanes & valid) >> j & 1 == 1).then_some(four[j]));
+    }
+    let v = |a: &Quad, j: usize| DVec3::new(a[0][j], a[1][j], a[2][j]);
+    std::array::from_fn(|j| {
+        let r = (v(rays.0, j), v(rays.1, j), v(rays.2, j));
+        (lanes >> j & 1 == 1)
+            .then(|| Patch::new(v(o, j), v(p, j), v(n, j), r))
+            .flatten()
+    })
+}
+
+/// `pixel_color` of four lanes (`maps[j]` looked up at `ats[j]`; None where a lane has no map
+/// or no hit): where the CPU has AVX2, the axes' test of every lane at once, and the closed
+/// forms only for the lanes whose pixel crosses a cell boundary. The same bits.
+#[inline(never)]
+pub(super) fn pixel_colors(
+    world: &World,
+    maps: [Option<&Texture>; 4],
+    ats: &[Option<At>; 4],
+) -> [Option<DVec3>; 4] {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (and so SSE4.1).
+        return unsafe { pixel_colors_avx2(world, maps, ats) };
+    }
+    std::array::from_fn(|j| match (maps[j], &ats[j]) {
+        (Some(t), Some(at)) => pixel_color(world, t, at),
+        _ => None,
+    })
+}
+
+/// `pixel_colors` with AVX2.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn pixel_colors_avx2(
+    world: &World,
+    maps: [Option<&Texture>; 4],
+    ats: &[Option<At>; 4],
+) -> [Option<DVec3>; 4] {
+    let scene = world.unshifted.as_deref().unwrap_or(&world.scene);
+    let (mut c, mut a, mut b) = ([[0.0; 4]; 3], [[0.0; 4]; 3], [[0.0; 4]; 3]);
+    let mut sizes = [1.0; 4];
+    let mut checkers: [Option<(f64, &[DVec3; 2])>; 4] = [None; 4];
+    for j in 0..4 {
+        let (Some(Texture::Checker { size, colors }), Some(at)) = (maps[j], &ats[j]) else {
+            continue;
+        };
+        let Some(q) = &at.patch else { continue };
+        let held = held(scene, at);
+        let (cj, aj, bj) = parallelogram(point(scene, at, &held), q, &held);
+        for i in 0..3 {
+            (c[i][j], a[i][j], b[i][j]) = (cj[i], aj[i], bj[i]);
+        }
+        sizes[j] = *size;
+        checkers[j] = Some((*size, colors));
+    }
+    // SAFETY: the CPU has AVX2.
+    let (sigma, one) = unsafe { pixels::one_cell(&c, &a, &b, &sizes) };
+    let mut out = [None; 4];
+    for (j, slot) in out.iter_mut().enumerate() {
+        let Some((size, colors)) = checkers[j] else {
+            continue;
+        };
+        *slot = match one >> j & 1 {
+            1 => Some(patch::mix(colors, sigma[j])),
+            _ => {
+                let v = |q: &Quad| DVec3::new(q[0][j], q[1][j], q[2][j]);
+                patch::checker::<Native>(size, colors, (v(&c), v(&a), v(&b)))
+            }
+        };
+    }
+    out
 }
 
 /// The footprints (`Footprint::new`) of the lanes `first .. first + 4` that are in `lanes`
@@ -368,8 +463,7 @@ fn one_cell<R: Round>(size: f64, colors: &[DVec3; 2], p: DVec3, f: &Footprint) -
     Some(if a > 0.0 { colors[0] } else { colors[1] })
 }
 
-/// The checker over the eye ray's pixel `q` around the lookup point `p`: its centre snapped
-/// like every lookup point, the coordinates the surface holds constant held along its edges.
+/// The checker over the eye ray's pixel `q` around the lookup point `p`.
 #[inline(always)]
 fn pixel<R: Round>(
     size: f64,
@@ -378,9 +472,16 @@ fn pixel<R: Round>(
     q: &Patch,
     held: &[Option<f64>; 3],
 ) -> Option<DVec3> {
+    patch::checker::<R>(size, colors, parallelogram(p, q, held))
+}
+
+/// The eye ray's pixel `q` around the lookup point `p` as the checker's closed forms take it:
+/// its centre snapped like every lookup point, the coordinates the surface holds constant held
+/// along its edges.
+#[inline(always)]
+fn parallelogram(p: DVec3, q: &Patch, held: &[Option<f64>; 3]) -> (DVec3, DVec3, DVec3) {
     let mask = DVec3::from_array(held.map(|h| if h.is_some() { 0.0 } else { 1.0 }));
-    let c = snapped(held, p + q.offset);
-    patch::checker::<R>(size, colors, (c, q.a * mask, q.b * mask))
+    (snapped(held, p + q.offset), q.a * mask, q.b * mask)
 }
 
 /// Footprints at least this many cells across (the disc's radius over the cell size) take

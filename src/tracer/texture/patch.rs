@@ -72,8 +72,13 @@ pub(super) fn checker<R: Round>(
     if !mean.is_finite() {
         return None;
     }
-    let mean = mean.clamp(-1.0, 1.0);
-    Some(colors[0] * (0.5 + 0.5 * mean) + colors[1] * (0.5 - 0.5 * mean))
+    Some(mix(colors, mean.clamp(-1.0, 1.0)))
+}
+
+/// The colour of a checker whose mean of S over the pixel is `mean` (in [−1, 1]).
+#[inline(always)]
+pub(super) fn mix(colors: &[DVec3; 2], mean: f64) -> DVec3 {
+    colors[0] * (0.5 + 0.5 * mean) + colors[1] * (0.5 - 0.5 * mean)
 }
 
 /// One axis crossing boundaries: the mean of S(x + α·a + β·b) over α, β in [−1, 1], which is

@@ -128,7 +128,7 @@ pub(super) fn exact_reciprocal(size: f64) -> Option<f64> {
 /// (both the correctly rounded half of k).
 #[inline]
 #[target_feature(enable = "avx2")]
-fn sign(k: __m256d) -> __m256d {
+pub(super) fn sign(k: __m256d) -> __m256d {
     let halves = _mm256_floor_pd(_mm256_mul_pd(k, _mm256_set1_pd(0.5)));
     let rest = _mm256_sub_pd(k, _mm256_mul_pd(_mm256_set1_pd(2.0), halves));
     let even = _mm256_cmp_pd::<_CMP_EQ_OQ>(rest, _mm256_setzero_pd());
