@@ -4,7 +4,9 @@
 # docs/spec/output.md (the 8- and 16-bit linear values) and docs/sequence-file.md
 # (`render.adaptive`: `threshold`, `max_samples`) alone, not from rayreel's code. It imports
 # texture_reference.py (which builds on mesh_reference.py; both unchanged) for the tracer, the
-# footprint cone and the checker's pixel mean, and adds:
+# footprint cone and the checker's pixel mean, motion_reference.py (with camera_reference.py and
+# film_reference.py) for sphere and rect lights (tracer.md "Area lights": the lanes that go on,
+# the points of sample k, their shadow rays), and adds:
 #   - the first pass: one sample at the centre, n² stratified samples, or R2 for other counts
 #     (frame 0, `sampler: stratified`), summed in sample order, mean rounded to f32;
 #   - the spread (per channel max − min, then the largest, rounded to f32; 0 for one sample);
@@ -15,13 +17,14 @@
 #     is smooth on X when (1) its eye ray's first hit is on X, a sphere or a plane whose material
 #     has a checker and no image; (2) every checker of that material took the pixel's mean (The
 #     pixel gave a value); (3) every non-ambient light reached the hit whole (N·L > 0 or NaN, the
-#     shadow ray unblocked; a spot of scale 0 does not count); (4) the path ends there (w·r0 <
+#     shadow ray unblocked; a spot of scale 0 does not count; an area light's lane goes on and each
+#     of the sample's m points has N·L > 0 and an unblocked shadow ray, every one traced here: a
+#     ray rayreel skips by its cone test counts as unblocked); (4) the path ends there (w·r0 <
 #     1e-30 or max_depth 1) or its reflection ray hits no object in a scene without a sky
 #     (a material that spawns trees turns the exemption off even when no object uses it);
 #   - the extension of marked pixels with R2 samples `samples` … `max_samples` − 1 and the mean
 #     (m·samples + sum)/max_samples, m the f32 first-pass mean, rounded to f32.
-# Area lights are left out (mesh_reference.py and texture_reference.py have none), as are alpha,
-# f32 frames and film frames.
+# Alpha, f32 frames and film frames are left out.
 #
 # Usage: python3 adaptive_reference.py [SCENE ...]     (needs numpy and Pillow)
 #   writes adaptive/SCENE.yaml (and the texture and mesh files when missing) and
@@ -29,7 +32,8 @@
 #   8-bit and 16-bit linear PNGs and compares every channel value (the total counts both).
 #   Per scene it prints how many pixels were marked, how many would have been without the
 #   exemption, how many second-difference tests (row or column triples) were skipped as smooth,
-#   and for how many first-pass samples each clause was the first to fail.
+#   and for how many first-pass samples each clause was the first to fail ('3 area lane', '3 area
+#   N·L' and '3 area blocked' for an area light's part of clause 3).
 #   SMOOTH=0 renders without the exemption (the rule before 2026-12-04), to check an older binary.
 import math, os, subprocess, sys, time
 import numpy as np
@@ -39,10 +43,11 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import texture_reference as tr  # noqa: E402
 import mesh_reference as mr  # noqa: E402
+import motion_reference as mo  # noqa: E402  (its sphere and rect lights; it sets the file folders, reset below)
 from mesh_reference import add, sub, vmul, smul, neg, dot, length, normalize  # noqa: E402
 
 ADIR = os.path.join(HERE, 'adaptive')
-tr.TEXDIR = ADIR  # image files of these scenes live beside them
+tr.TEXDIR = ADIR  # image files of these scenes live beside them (motion_reference set its own)
 mr.MESHDIR = ADIR  # and so do their mesh files
 SMOOTH = os.environ.get('SMOOTH', '1') != '0'
 f32 = np.float32
@@ -61,7 +66,14 @@ def fract(x): return x - math.trunc(x)
 A1, A2 = 0.7548776662466927, 0.5698402909980532
 
 
-class AdaptiveScene(tr.TexScene):
+def towards(q, P):  # tracer.md "Each light": L and dist of a point light at q seen from P
+    v = sub(q, P); dist = length(v)
+    if dist > 0:
+        return (v[0] / dist, v[1] / dist, v[2] / dist), dist
+    return (0.0, 0.0, 0.0), 0.0
+
+
+class AdaptiveScene(mo.AreaTexScene):  # texture_reference's tracer; area lights by motion_reference's loop
     def __init__(self, d):
         super().__init__(d)
         ad = d['render']['adaptive']
@@ -102,8 +114,13 @@ class AdaptiveScene(tr.TexScene):
         y = ((1.0 - (2.0 * (i + v)) / H) * H) / W
         return normalize(add(add(self.fwd, smul(x * self.s, self.right)), smul(y * self.s, self.up_c)))
 
-    def sample(self, d):
-        return self.trace_tree(self.pos, d) if self.trees else self.trace(self.pos, d)
+    def sample(self, i, j, k):
+        self.ctx = (self.frame, i * self.W + j, k)  # the area lights' points of sample k
+        d = self.eye(i, j, *self.offset(self.seed(i, j), k))
+        return d, self.trace_tree(self.pos, d) if self.trees else self.trace(self.pos, d)
+
+    def seed(self, i, j):
+        return mix(mix(0x9e3779b97f4a7c15 ^ self.frame) ^ (i * self.W + j))
 
     # ---- tracer.md "Smooth pixels": the object a first-pass sample is smooth on, or the clause
     # that fails first ('miss' when the eye ray hits nothing, 1 to 4 otherwise)
@@ -144,12 +161,22 @@ class AdaptiveScene(tr.TexScene):
         for li in self.lights:
             if li['kind'] == 'ambient':
                 continue
+            if li['kind'] in mo.AREA:
+                # an area light: the lane goes on, and each of the sample's m points (this sample's
+                # k) faces the hit and is unblocked; every shadow ray is traced here, so one rayreel
+                # skips (its cone meets no occluder) counts as unblocked, as the rule says
+                qs = self.area_points(li, P)
+                if qs is None:
+                    return None, '3 area lane'
+                for q in qs:
+                    L, dist = towards(q, P)
+                    if dot(N, L) <= 0:  # N·L > 0 needed (NaN counts as > 0, as for a point light)
+                        return None, '3 area N·L'
+                    if self.blocked(P, normalize(L), dist, ob):
+                        return None, '3 area blocked'
+                continue
             if li['kind'] in ('point', 'spot'):
-                v = sub(li['q'], P); dist = length(v)
-                if dist > 0:
-                    L = (v[0] / dist, v[1] / dist, v[2] / dist)
-                else:
-                    L = (0.0, 0.0, 0.0); dist = 0.0
+                L, dist = towards(li['q'], P)
             else:
                 L = li['L']; dist = mr.INF
             if li['kind'] == 'spot':
@@ -185,14 +212,12 @@ class AdaptiveScene(tr.TexScene):
         self.fails = {}
         for i in range(H):
             for j in range(W):
-                seed = mix(mix(0x9e3779b97f4a7c15 ^ self.frame) ^ (i * W + j))
                 self.pix = self.pixel_rays(i, j)
                 acc = (0.0, 0.0, 0.0)
                 lo = [math.inf] * 3; hi = [-math.inf] * 3
                 on = set()
                 for k in range(n):
-                    d = self.eye(i, j, *self.offset(seed, k))
-                    c = self.sample(d)
+                    d, c = self.sample(i, j, k)
                     acc = add(acc, c)
                     lo = [c[q] if c[q] < lo[q] else lo[q] for q in range(3)]
                     hi = [c[q] if c[q] > hi[q] else hi[q] for q in range(3)]
@@ -237,11 +262,10 @@ class AdaptiveScene(tr.TexScene):
             for j in range(W):
                 if not marked[i, j]:
                     continue
-                seed = mix(mix(0x9e3779b97f4a7c15 ^ self.frame) ^ (i * W + j))
                 self.pix = self.pixel_rays(i, j)
                 acc = (0.0, 0.0, 0.0)
                 for k in range(n, N):
-                    acc = add(acc, self.sample(self.eye(i, j, *self.offset(seed, k))))
+                    acc = add(acc, self.sample(i, j, k)[1])
                 mm = [float(x) for x in mean[i, j]]
                 img[i, j] = [float(f32((mm[q] * float(n) + acc[q]) / float(N))) for q in range(3)]
         self.stats = dict(marked=int(marked.sum()), marked_old=int(old.sum()), skipped=skipped,
@@ -395,6 +419,54 @@ SCENES = {
         {'sphere': {'center': [-0.8, 0, -1], 'radius': 1, 'material': 'blue'}},
         {'sphere': {'center': [1.1, -0.3, -0.6], 'radius': 0.7, 'material': 'mirror'}},
     ], {'position': [0, 0.8, 3], 'look_at': [0, 0, -1], 'fov': 60}, 2, 0.03, 8, w=48, h=27),
+    # area lights (tracer.md "Area lights"; clause 3: the lane goes on and every one of the
+    # sample's m points faces the hit, N·L > 0, with its shadow ray unblocked):
+    # a sphere light (16 points) over a plain sphere: its soft shadow on the checker floor (the
+    # penumbra is not smooth, the floor in full light is) and a checker sphere beside it
+    'area_sphere': scene([
+        FLOOR,
+        {'sphere': {'center': [0.3, 0.7, -1.6], 'radius': 0.7, 'material': 'clay'}},
+        {'sphere': {'center': [-1.3, 0.5, -1.0], 'radius': 0.5, 'material': 'tiles'}},
+    ], {'position': [0, 1.8, 3], 'look_at': [0, 0.3, -1.4], 'fov': 60}, 2, 0.03, 8, w=64, h=48,
+        lights=[{'sphere': {'center': [-0.6, 3.2, -0.4], 'radius': 0.6, 'ambient': [0.2, 0.2, 0.2],
+                            'diffuse': [0.9, 0.9, 0.85], 'specular': [0.8, 0.8, 0.8], 'samples': 16}}, AMB]),
+    # a tilted rect light (8 points) whose plane cuts the floor: where (P − c)·n ≤ 0 the lane does
+    # not go on (the ambient term alone, not smooth); its other side is lit whole except in the
+    # shadow of a sphere; stratified first pass
+    'area_rect_s4': scene([
+        FLOOR,
+        {'sphere': {'center': [-0.6, 0.45, -1.4], 'radius': 0.45, 'material': 'clay'}},
+        {'sphere': {'center': [-1.6, 0.5, -2.4], 'radius': 0.5, 'material': 'tiles'}},
+    ], {'position': [0, 1.6, 3], 'look_at': [0, 0.2, -1.5], 'fov': 65}, 4, 0.03, 16, w=64, h=48,
+        lights=[{'rect': {'corner': [0.8, 0.4, -3.0], 'edge_u': [0, 0, 2.5], 'edge_v': [0.6, 1.6, 0],
+                          'ambient': [0.15, 0.15, 0.15], 'diffuse': [1.0, 0.95, 0.9], 'specular': [0.6, 0.6, 0.6],
+                          'samples': 8}}, AMB]),
+    # a sphere light low over the floor, partly below it, beside a checker sphere: from most of the
+    # floor and the sphere some of its points are below the hit's horizon (N·L ≤ 0), the floor
+    # under it is inside the light (δ ≤ R: the lane does not go on); one sample a first pass
+    'area_horizon_s1': scene([
+        FLOOR,
+        {'sphere': {'center': [0.9, 0.6, -1.6], 'radius': 0.6, 'material': 'tiles'}},
+    ], {'position': [0, 1.5, 2.5], 'look_at': [0, 0.2, -1.4], 'fov': 60}, 1, 0.03, 4, w=64, h=48,
+        lights=[{'sphere': {'center': [-0.5, 0.3, -1.3], 'radius': 0.4, 'ambient': [0.1, 0.1, 0.1],
+                            'diffuse': [1.2, 1.1, 0.9], 'specular': [0.8, 0.8, 0.8], 'samples': 8}},
+                {'ambient': {'color': [0.15, 0.15, 0.18]}}]),
+    # a point light (with ambient), a spot whose cone leaves most of the floor at scale 0 (it does
+    # not count there), a rect light and a sphere light (one point) in one file, over a reflective
+    # checker floor (clause 4: its reflection ray sees the spheres or the background)
+    'area_mixed': scene([
+        {'plane': {'point': [0, 0, 0], 'normal': [0, 1, 0], 'material': 'tiles_refl'}},
+        {'sphere': {'center': [-0.8, 0.6, -1.6], 'radius': 0.6, 'material': 'tiles'}},
+        {'sphere': {'center': [0.9, 0.4, -1.2], 'radius': 0.4, 'material': 'clay'}},
+    ], {'position': [0, 1.5, 3], 'look_at': [0, 0.3, -1.4], 'fov': 60}, 2, 0.03, 8, w=64, h=48,
+        lights=[POINT,
+                {'rect': {'corner': [-2, 3, -2], 'edge_u': [1.2, 0, 0], 'edge_v': [0, 0, 1.5],
+                          'diffuse': [0.5, 0.5, 0.55], 'specular': [0.4, 0.4, 0.4], 'samples': 4}},
+                {'spot': {'position': [1.5, 3, -0.5], 'direction': [0, -1, -0.2], 'inner_angle': 8, 'outer_angle': 15,
+                          'ambient': [0.05, 0.05, 0.05], 'diffuse': [0.6, 0.5, 0.4], 'specular': [0.5, 0.5, 0.5]}},
+                {'sphere': {'center': [2.5, 2, 1], 'radius': 0.4, 'ambient': [0.05, 0.05, 0.05],
+                            'diffuse': [0.3, 0.3, 0.3], 'specular': [0.3, 0.3, 0.3], 'samples': 1}},
+                AMB]),
 }
 SCENES['unused_glass']['materials'] = dict(SCENES['unused_glass']['materials'], glass=MATS['glass'])
 

@@ -384,8 +384,9 @@ def place_meshes(sc, posed):
 
 
 # ---------------------------------------------------------------- area lights (tracer.md "Area lights")
-# mesh_reference's light loop has no sphere or rect lights; scenes with them (and only ambient
-# lights beside them) are lit by this loop, which knows the frame, pixel and sample index k.
+# mesh_reference's light loop has no sphere or rect lights; scenes with them are lit by this
+# loop, which knows the frame, pixel and sample index k (the other lights of such a scene by
+# mesh_reference's loop, one light at a time; adaptive_reference.py uses it too).
 def sobol2(g):
     out, v, i = 0, 1 << 31, 0
     while g >> i:
@@ -396,85 +397,117 @@ def sobol2(g):
     return out
 
 
+def area_light(ell, kind, o):
+    """A `sphere` or `rect` light of the file's lights (ℓ its index there, every kind counted)."""
+    col = lambda k: tuple(map(float, o.get(k, (0, 0, 0))))
+    li = dict(kind=kind, ell=ell, m=int(o.get('samples', 16)), ia=col('ambient'), id=col('diffuse'), is_=col('specular'))
+    if kind == 'sphere':
+        li.update(C=tuple(map(float, o['center'])), R=float(o['radius']))
+    else:
+        c, u, v = (tuple(map(float, o[k])) for k in ('corner', 'edge_u', 'edge_v'))
+        li.update(c=c, u=u, v=v, n=tuple(o['normal_kept']) if 'normal_kept' in o else rect_normal(u, v))
+    return li
+
+
+AREA = ('sphere', 'rect')
+
+
 class AreaScene(mr.Scene):
     def __init__(self, d):
-        super().__init__(dict(d, lights=[]))
-        self.lights = []
-        col = lambda o, k: tuple(map(float, o.get(k, (0, 0, 0))))
-        for ell, l in enumerate(d['lights']):
-            (kind, o), = l.items()
-            if kind == 'ambient':
-                self.lights.append(dict(kind='ambient', a=tuple(map(float, o['color']))))
-                continue
-            li = dict(kind=kind, ell=ell, m=int(o.get('samples', 16)), ia=col(o, 'ambient'), id=col(o, 'diffuse'), is_=col(o, 'specular'))
-            if kind == 'sphere':
-                li.update(C=tuple(map(float, o['center'])), R=float(o['radius']))
-            elif kind == 'rect':
-                c, u, v = (tuple(map(float, o[k])) for k in ('corner', 'edge_u', 'edge_v'))
-                li.update(c=c, u=u, v=v, n=tuple(o['normal_kept']) if 'normal_kept' in o else rect_normal(u, v))
-            else:
-                raise NotImplementedError('area-light scenes take sphere, rect and ambient lights')
-            self.lights.append(li)
+        # mesh_reference loads the other lights; the area lights take their places in file order
+        is_area = lambda l: any(k in l for k in AREA)
+        super().__init__(dict(d, lights=[l for l in d['lights'] if not is_area(l)]))
+        others = iter(self.lights)
+        self.lights = [area_light(ell, *next(iter(l.items()))) if is_area(l) else next(others)
+                       for ell, l in enumerate(d['lights'])]
+        self.area = any(li['kind'] in AREA for li in self.lights)
         self.ctx = (0, 0, 0)  # (frame, pixel, k) of the sample being traced
 
-    def light_sum(self, P, N, d, mat, origin, leaving):
-        add, sub, had, vmul, dot = mr.add, mr.sub, mr.had, mr.vmul, mr.dot
+    def area_points(self, li, P):
+        """The m points q of area light li for the sample self.ctx seen from P, in order, or None
+        when the lane does not go on (behind a rect, inside or on a sphere light)."""
+        sub = mr.sub
         frame, pixel, k = self.ctx
-        local = (0.0, 0.0, 0.0)
+        if li['kind'] == 'rect':
+            if not (mr.dot(sub(P, li['c']), li['n']) > 0):
+                return None
+        else:
+            C, R = li['C'], li['R']
+            v = sub(C, P)
+            delta = math.sqrt((v[0] * v[0] + v[1] * v[1]) + v[2] * v[2])
+            if not (delta > R):
+                return None
+            r = 1.0 / delta
+            w = (v[0] * r, v[1] * r, v[2] * r)
+            sg = math.copysign(1.0, w[2])
+            a = -1.0 / (sg + w[2])
+            b = (w[0] * w[1]) * a
+            e1 = (1.0 + ((sg * w[0]) * w[0]) * a, sg * b, (-sg) * w[0])
+            e2 = (b, sg + (w[1] * w[1]) * a, -w[1])
+        z = fr.mix(fr.mix(fr.mix(0x9e3779b97f4a7c15 ^ frame) ^ pixel) ^ 0xbb67ae8584caa73b)
+        h = fr.mix(z ^ li['ell'])
+        sx, sy = h >> 32, h & 0xffffffff
+        m = li['m']
+        qs = []
+        for j in range(m):
+            g = k * m + j
+            x = (fr.rev32(g) ^ sx) * 2.0 ** -32
+            y = (sobol2(g) ^ sy) * 2.0 ** -32
+            if li['kind'] == 'rect':
+                c, u, vv = li['c'], li['u'], li['v']
+                q = tuple((c[i] + x * u[i]) + y * vv[i] for i in range(3))
+            else:
+                a2, b2 = 2.0 * x - 1.0, 2.0 * y - 1.0
+                if a2 == 0.0 and b2 == 0.0:
+                    al = be = 0.0
+                else:
+                    # tracer.md: the concentric map of Thin lens (Taylor sin and cos)
+                    if max(a2, 0.0 - a2) > max(b2, 0.0 - b2):
+                        sn, cs = fr.sin_cos(fr.QUARTER_PI * (b2 / a2))
+                        al, be = a2 * cs, a2 * sn
+                    else:
+                        sn, cs = fr.sin_cos(fr.QUARTER_PI * (a2 / b2))
+                        al, be = b2 * sn, b2 * cs
+                q = tuple(C[i] + R * ((al * e1[i]) + (be * e2[i])) for i in range(3))
+            qs.append(q)
+        return qs
+
+    def one_light(self, li, P, N, d, mat, origin, leaving, **fields):
+        """mesh_reference's loop for light li alone (with `fields` replaced), from local = 0."""
+        keep, self.lights = self.lights, [dict(li, **fields)]
+        try:
+            return mr.Scene.light_sum(self, P, N, d, mat, origin, leaving)
+        finally:
+            self.lights = keep
+
+    def light_sum(self, P, N, d, mat, origin, leaving):
+        if not self.area:
+            return mr.Scene.light_sum(self, P, N, d, mat, origin, leaving)
+        add, had, vmul = mr.add, mr.had, mr.vmul
+        zero = (0.0, 0.0, 0.0)
+        local = zero
         for li in self.lights:
             if li['kind'] == 'ambient':
                 local = add(local, had(mat['ka'], li['a']))
                 continue
+            if li['kind'] not in AREA:
+                # a point, directional or spot light, in two parts so that local sums as "Each
+                # light" says, (local + (scale·ka)∘ia) + term: alone with diffuse and specular 0
+                # its loop gives (0 + (scale·ka)∘ia) + 0, and with ambient 0, (0 + 0) + term
+                local = add(local, self.one_light(li, P, N, d, mat, origin, leaving, id=zero, is_=zero))
+                local = add(local, self.one_light(li, P, N, d, mat, origin, leaving, ia=zero))
+                continue
             local = add(local, had(mat['ka'], li['ia']))
-            if li['kind'] == 'rect':
-                if not (dot(sub(P, li['c']), li['n']) > 0):
-                    continue
-            else:
-                C, R = li['C'], li['R']
-                v = sub(C, P)
-                delta = math.sqrt((v[0] * v[0] + v[1] * v[1]) + v[2] * v[2])
-                if not (delta > R):
-                    continue
-                r = 1.0 / delta
-                w = (v[0] * r, v[1] * r, v[2] * r)
-                sg = math.copysign(1.0, w[2])
-                a = -1.0 / (sg + w[2])
-                b = (w[0] * w[1]) * a
-                e1 = (1.0 + ((sg * w[0]) * w[0]) * a, sg * b, (-sg) * w[0])
-                e2 = (b, sg + (w[1] * w[1]) * a, -w[1])
-            z = fr.mix(fr.mix(fr.mix(0x9e3779b97f4a7c15 ^ frame) ^ pixel) ^ 0xbb67ae8584caa73b)
-            h = fr.mix(z ^ li['ell'])
-            sx, sy = h >> 32, h & 0xffffffff
+            qs = self.area_points(li, P)
+            if qs is None:
+                continue
             m = li['m']
             share = 1.0 / m
-            for j in range(m):
-                g = k * m + j
-                x = (fr.rev32(g) ^ sx) * 2.0 ** -32
-                y = (sobol2(g) ^ sy) * 2.0 ** -32
-                if li['kind'] == 'rect':
-                    c, u, vv = li['c'], li['u'], li['v']
-                    q = tuple((c[i] + x * u[i]) + y * vv[i] for i in range(3))
-                else:
-                    a2, b2 = 2.0 * x - 1.0, 2.0 * y - 1.0
-                    if a2 == 0.0 and b2 == 0.0:
-                        al = be = 0.0
-                    else:
-                        # tracer.md: the concentric map of Thin lens (Taylor sin and cos)
-                        if max(a2, 0.0 - a2) > max(b2, 0.0 - b2):
-                            sn, cs = fr.sin_cos(fr.QUARTER_PI * (b2 / a2))
-                            al, be = a2 * cs, a2 * sn
-                        else:
-                            sn, cs = fr.sin_cos(fr.QUARTER_PI * (a2 / b2))
-                            al, be = b2 * sn, b2 * cs
-                    q = tuple(C[i] + R * ((al * e1[i]) + (be * e2[i])) for i in range(3))
+            for q in qs:
                 # "Each point is a point light at q, exactly as above": mesh_reference's loop for
                 # one point light without ambient gives (0 + ka∘0) + term = term, or 0 when the
                 # point adds nothing (N·L ≤ 0, blocked), and local + 0 = local
-                keep, self.lights = self.lights, [dict(kind='point', q=q, ia=(0.0, 0.0, 0.0), id=li['id'], is_=li['is_'])]
-                try:
-                    term = mr.Scene.light_sum(self, P, N, d, mat, origin, leaving)
-                finally:
-                    self.lights = keep
+                term = self.one_light(dict(kind='point', q=q), P, N, d, mat, origin, leaving, ia=zero, id=li['id'], is_=li['is_'])
                 local = add(local, vmul(term, share) if m != 1 else term)
         return local
 
