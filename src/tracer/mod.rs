@@ -555,15 +555,21 @@ fn mark(
                 (2.0 * rgb[3 * i + c] - rgb[3 * a + c] - rgb[3 * b + c]).abs() > 2.0 * threshold
             })
     };
-    (0..w * h)
-        .into_par_iter()
-        .map(|i| {
-            let (row, col) = (i / w, i % w);
-            spread[i] > threshold
-                || (col > 0 && col + 1 < w && bumps(i - 1, i, i + 1))
-                || (row > 0 && row + 1 < h && bumps(i - w, i, i + w))
-        })
-        .collect()
+    // Row by row: per pixel, the index's division and rayon's per-item collection cost more
+    // than the test.
+    let mut marks = vec![false; w * h];
+    marks
+        .par_chunks_mut(w.max(1))
+        .enumerate()
+        .for_each(|(row, line)| {
+            for (col, m) in line.iter_mut().enumerate() {
+                let i = row * w + col;
+                *m = spread[i] > threshold
+                    || (col > 0 && col + 1 < w && bumps(i - 1, i, i + 1))
+                    || (row > 0 && row + 1 < h && bumps(i - w, i, i + w));
+            }
+        });
+    marks
 }
 
 /// The last guard before a pixel: a numerical surprise, or a colour beyond f32, never writes
