@@ -73,7 +73,7 @@ fn cross(a: [__m256d; 3], b: [__m256d; 3]) -> [__m256d; 3] {
 /// a · b as `DVec3::dot` computes it: (x + y) + z.
 #[inline]
 #[target_feature(enable = "avx2")]
-fn dot(a: [__m256d; 3], b: [__m256d; 3]) -> __m256d {
+pub(super) fn dot(a: [__m256d; 3], b: [__m256d; 3]) -> __m256d {
     let p = |i: usize| _mm256_mul_pd(a[i], b[i]);
     _mm256_add_pd(_mm256_add_pd(p(0), p(1)), p(2))
 }

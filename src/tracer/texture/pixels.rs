@@ -5,7 +5,7 @@
 //! them); lanes whose box crosses a cell boundary are left to the scalar closed forms. One lane
 //! at a time these were two dependent chains of divisions, a quarter of the checker talk's time.
 
-use super::{Patch, Quad, TINY_BOX, taps::sign};
+use super::{Patch, Quad, TINY_BOX, footprint::dot, taps::sign};
 use glam::DVec3;
 use std::arch::x86_64::*;
 
@@ -103,14 +103,6 @@ pub(super) unsafe fn one_cell(c: &Quad, a: &Quad, b: &Quad, size: &[f64; 4]) -> 
 fn finite(v: __m256d) -> __m256d {
     let abs = _mm256_andnot_pd(_mm256_set1_pd(-0.0), v);
     _mm256_cmp_pd::<_CMP_LT_OQ>(abs, _mm256_set1_pd(f64::INFINITY))
-}
-
-/// a · b as `DVec3::dot` computes it: (x + y) + z.
-#[inline]
-#[target_feature(enable = "avx2")]
-fn dot(a: [__m256d; 3], b: [__m256d; 3]) -> __m256d {
-    let p = |i: usize| _mm256_mul_pd(a[i], b[i]);
-    _mm256_add_pd(_mm256_add_pd(p(0), p(1)), p(2))
 }
 
 #[cfg(test)]
