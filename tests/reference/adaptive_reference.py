@@ -140,11 +140,7 @@ class AdaptiveScene(mo.AreaTexScene):  # texture_reference's tracer; area lights
         N = neg(N0) if dot(N0, d) > 0 else N0
         # 2. every checker took the pixel's mean (texture.md "The pixel" gave a value)
         snaps = ob['snap'] if kind == 'plane' else []
-        def snap(X):
-            X = list(X)
-            for i, c in snaps:
-                X[i] = c
-            return tuple(X)
+        snap = tr.snapper(snaps)
         held = [i for i, _ in snaps]
         keep = lambda v: tuple(0.0 if i in held else v[i] for i in range(3))
         Pl = snap(add(P, (0.0, 0.0, 0.0)))  # the lookup point (f64 frame: O = 0)
@@ -180,14 +176,7 @@ class AdaptiveScene(mo.AreaTexScene):  # texture_reference's tracer; area lights
             else:
                 L = li['L']; dist = mr.INF
             if li['kind'] == 'spot':
-                x = -dot(L, li['axis'])
-                if x >= li['ci']:
-                    scale = 1.0
-                elif x <= li['co']:
-                    scale = 0.0
-                else:
-                    tt = (x - li['co']) / (li['ci'] - li['co'])
-                    scale = (tt * tt) * (3.0 - 2.0 * tt)
+                scale = mr.spot_scale(li, L)
                 if scale == 0:  # does not count: its scale is continuous there
                     continue
             if dot(N, L) <= 0:  # N·L > 0 needed (NaN counts as > 0)

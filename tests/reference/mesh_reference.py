@@ -43,6 +43,17 @@ def had(a, b): return (a[0] * b[0], a[1] * b[1], a[2] * b[2])
 def vdiv(a, b): return (a[0] / b[0], a[1] / b[1], a[2] / b[2])
 def neg(a): return (-a[0], -a[1], -a[2])
 def dot(a, b): return (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2]
+
+def spot_scale(li, L):
+    """A spot's smoothstep between its outer and inner cones along -L (spec: lights)."""
+    x = -dot(L, li['axis'])
+    if x >= li['ci']:
+        return 1.0
+    if x <= li['co']:
+        return 0.0
+    tt = (x - li['co']) / (li['ci'] - li['co'])
+    return (tt * tt) * (3.0 - 2.0 * tt)
+
 def length(v): return math.sqrt(dot(v, v))
 def normalize(v):
     r = fdiv(1.0, math.sqrt(dot(v, v)))
@@ -470,14 +481,7 @@ class Scene:
                 L = li['L']; dist = INF
             scale = None
             if li['kind'] == 'spot':
-                x = -dot(L, li['axis'])
-                if x >= li['ci']:
-                    scale = 1.0
-                elif x <= li['co']:
-                    scale = 0.0
-                else:
-                    tt = (x - li['co']) / (li['ci'] - li['co'])
-                    scale = (tt * tt) * (3.0 - 2.0 * tt)
+                scale = spot_scale(li, L)
                 if scale == 0:
                     continue
                 local = add(local, had(smul(scale, mat['ka']), li['ia']))

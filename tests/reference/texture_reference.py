@@ -33,6 +33,16 @@ mr.MESHDIR = TEXDIR  # mesh files of the texture scenes live beside them
 
 
 # ---------------------------------------------------------------- helpers
+
+def snapper(snaps):
+    """snap(X): X with each held coordinate (i, c) in snaps set to c (texture.md)."""
+    def snap(X):
+        X = list(X)
+        for i, c in snaps:
+            X[i] = c
+        return tuple(X)
+    return snap
+
 def ffloor(x):  # IEEE floor on floats (Python's math.floor gives ints and fails on inf/NaN)
     return float(math.floor(x)) if math.isfinite(x) else x
 
@@ -524,11 +534,7 @@ class TexScene(mr.Scene):
             H = P_hit  # f64 frame: O = (0, 0, 0); p + O per component is p
             H = add(H, (0.0, 0.0, 0.0))
             snaps = ob['snap'] if kind == 'plane' else []
-        def snap(X):
-            X = list(X)
-            for i, c in snaps:
-                X[i] = c
-            return tuple(X)
+        snap = snapper(snaps)
         P = snap(H)
         # footprint ellipse
         r = 0.5 * Wd
